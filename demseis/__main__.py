@@ -1,0 +1,5 @@
+"""``python -m demseis`` is the same as the ``demseis`` console script."""
+
+from demseis.generator.cli import main
+
+raise SystemExit(main())

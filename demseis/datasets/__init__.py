@@ -1,0 +1,1 @@
+"""demseis.datasets: Zarr store, validation and the PyTorch Dataset."""

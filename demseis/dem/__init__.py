@@ -1,0 +1,1 @@
+"""demseis.dem: 2D discrete element model."""

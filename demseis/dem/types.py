@@ -1,0 +1,91 @@
+"""Plain data types shared by the DEM and everything downstream of it.
+
+Coordinates: x to the right, y up, metres. The model box is ``0 <= x <= width_m`` and
+``0 <= y <= height_m`` before faulting (y = 0 is the top of the basement).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Material:
+    """Mechanical parameters of the elements and their contacts (SI units).
+
+    Attributes
+    ----------
+    density_kg_m3 : element density; mass m = rho * pi * r**2 (unit thickness).
+    kn_n_m : normal spring stiffness Kn.
+    ks_ratio : shear stiffness as a fraction of Kn (Ks = ks_ratio * Kn).
+    friction : inter-element friction coefficient mu.
+    cohesion_n : contact cohesion C0 in newtons (slider |Fs| <= C0 + mu * Fn).
+    bond_strain : bond-breaking strain r0 (bond breaks when d - R > r0 * R).
+    model : ``"frictional"`` (all bonds start broken) or ``"bonded"`` (bonds between initial
+        neighbours).
+    damping_scale : global viscous damping eta = dt * damping_scale (N s / m per second of dt).
+    gravity_m_s2 : gravitational acceleration.
+    """
+
+    density_kg_m3: float = 2500.0
+    kn_n_m: float = 1.0e10
+    ks_ratio: float = 0.5
+    friction: float = 0.4
+    cohesion_n: float = 0.0
+    bond_strain: float = 0.02
+    model: str = "frictional"
+    damping_scale: float = 3.0e9
+    gravity_m_s2: float = 9.81
+
+
+@dataclass(frozen=True)
+class NormalFault:
+    """Basement normal fault imposed by moving the hanging-wall base and side wall.
+
+    Attributes
+    ----------
+    x_m : x where the basement fault meets the base of the model (y = 0).
+    dip_deg : fault dip in degrees, 30-70 typical; the hanging wall is on the side the fault
+        dips towards (``dip_direction``).
+    throw_m : target vertical throw of the basement fault.
+    dip_direction : ``"right"`` (hanging wall at larger x) or ``"left"``.
+    speed_m_s : wall speed along dip; small enough to be quasi-static.
+    """
+
+    x_m: float = 2500.0
+    dip_deg: float = 45.0
+    throw_m: float = 450.0
+    dip_direction: str = "right"
+    speed_m_s: float = 5.0
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """State of the assembly at one increment.
+
+    Attributes
+    ----------
+    index : snapshot number (0 = the undeformed reference).
+    step : integrator step at which it was taken.
+    throw_m : basement throw applied so far (m).
+    ids : (n,) int64 element ids, stable across snapshots of one run.
+    xy : (n, 2) float64 element centres (m).
+    radius : (n,) float64 radii (m).
+    layer : (n,) int16 layer index (0 = deepest pre-kinematic layer; growth layers follow).
+    deposited : (n,) bool, True for elements added by syn-tectonic sedimentation.
+    """
+
+    index: int
+    step: int
+    throw_m: float
+    ids: np.ndarray
+    xy: np.ndarray
+    radius: np.ndarray
+    layer: np.ndarray
+    deposited: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return int(self.ids.shape[0])

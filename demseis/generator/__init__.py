@@ -1,0 +1,1 @@
+"""demseis.generator: config, sampling, sweep and CLI."""

@@ -1,0 +1,1 @@
+"""demseis.labels: strain, fault/damage/layer labels and scoring."""

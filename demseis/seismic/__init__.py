@@ -1,0 +1,1 @@
+"""demseis.seismic: properties, rasterisation, impedance, reflectivity, wavelets, noise."""
