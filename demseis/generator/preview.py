@@ -1,0 +1,191 @@
+"""``demseis preview``: PNG figures of one run, like the paper's Figures 2-6."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from demseis.dem.types import Snapshot
+from demseis.errors import ConfigError, InputError
+from demseis.generator.config import PRESETS, Config, load_config, parse_config
+from demseis.generator.pipeline import fault_base_x, grid_of, property_model_of, simulate_run
+from demseis.generator.sampling import plan_run, rng_at, seed_sequence
+
+
+def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot], dict[str, Any]]:
+    path = Path(source)
+    if path.is_dir():
+        from demseis.datasets import open_store, read_particles, shard_status
+
+        root = open_store(path)
+        cfg = parse_config(dict(root.attrs)["config"], source=str(path))
+        if run >= cfg.sweep.n_runs:
+            raise InputError(f"--run {run}: the store has runs 0..{cfg.sweep.n_runs - 1}")
+        if shard_status(path)[run] != 1:
+            raise InputError(f"--run {run} is not done in store {source!r}")
+        snaps = read_particles(path, run)
+        p = plan_run(cfg, run).params
+        info = {"fault_x_m": fault_base_x(cfg, p["fault_x_frac"], p["dip_deg"], p["dip_direction"]),
+                "throw_target_m": float(p["throw_m"])}
+        return cfg, snaps, info
+    if source in PRESETS:
+        cfg = load_config(preset=source)
+    elif path.is_file():
+        cfg = load_config(path)
+    else:
+        raise ConfigError(f"{source!r} is neither a config file, a preset ({', '.join(PRESETS)}) nor a store")
+    if run >= cfg.sweep.n_runs:
+        raise InputError(f"--run {run}: the config has runs 0..{cfg.sweep.n_runs - 1}")
+    snaps, info = simulate_run(cfg, plan_run(cfg, run))
+    return cfg, snaps, info
+
+
+def _draw_particles(ax: Any, snap: Snapshot, colors: np.ndarray, *, alpha_deposited: float = 0.45,
+                    values: np.ndarray | None = None, cmap: str | None = None) -> Any:
+    from matplotlib.collections import EllipseCollection
+
+    d = 2 * snap.radius
+    kw: dict[str, Any] = {}
+    if values is None:
+        fc = colors.copy()
+        fc[snap.deposited, 3] = alpha_deposited
+        kw["facecolors"] = fc
+    coll = EllipseCollection(d, d, np.zeros_like(d), units="xy", offsets=snap.xy,
+                             offset_transform=ax.transData, linewidths=0, **kw)
+    if values is not None:
+        coll.set_array(values)
+        coll.set_cmap(cmap)
+    ax.add_collection(coll)
+    ax.set_aspect("equal")
+    return coll
+
+
+def layer_colors(layer: np.ndarray, n_pre: int) -> np.ndarray:
+    """RGBA per element: alternating warm/cool bands for pre-kinematic layers, greys for growth."""
+    import matplotlib
+
+    cmap = matplotlib.colormaps["tab20"]
+    rgba = np.asarray(cmap((layer % 20) / 20.0))
+    growth = layer >= n_pre
+    rgba[growth, :3] = np.where((layer[growth] % 2)[:, None] == 0, 0.55, 0.8)
+    return rgba
+
+
+def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
+    """Write the preview figures of run ``run`` of ``source`` into ``out_dir``; return the paths."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from demseis.labels import label_maps, strain_history
+    from demseis.seismic import (
+        draw_layer_properties,
+        element_properties,
+        property_grids,
+        rasterise,
+        synthetic_sections,
+    )
+
+    cfg, snaps, info = _load_source(source, run)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    spec = plan_run(cfg, run)
+    p = spec.params
+    n_pre = int(p["n_layers"])
+    grid = grid_of(cfg)
+    W, H = cfg.model.width_m, cfg.model.height_m
+    extent = (grid.x0_m, grid.x0_m + grid.nx * grid.cell_m, grid.top_m - grid.nz * grid.cell_m, grid.top_m)
+    title = f"run {run}: dip {p['dip_deg']:.0f}°, throw {p['throw_m']:.0f} m"
+    written: list[Path] = []
+
+    def save(fig: Any, name: str) -> None:
+        path = out / name
+        fig.savefig(path, dpi=110, bbox_inches="tight")
+        plt.close(fig)
+        written.append(path)
+
+    # Figure 2: particle evolution
+    ncol = min(3, len(snaps))
+    nrow = int(np.ceil(len(snaps) / ncol))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 2.9 * nrow), squeeze=False)
+    for ax, s in zip(axes.flat, snaps):
+        _draw_particles(ax, s, layer_colors(s.layer, n_pre))
+        ax.set_xlim(0, W)
+        ax.set_ylim(min(0.0, float((s.xy[:, 1] - s.radius).min())), H * 1.02)
+        ax.set_title(f"snapshot {s.index}: throw {s.throw_m:.0f} m, step {s.step}", fontsize=9)
+    for ax in list(axes.flat)[len(snaps):]:
+        ax.axis("off")
+    fig.suptitle(f"Particle evolution ({title}); translucent = syn-tectonic deposits")
+    save(fig, "fig2_particles.png")
+
+    # Figure 3: particle Vp and density
+    model = property_model_of(cfg, p)
+    n_total = max(int(s.layer.max()) for s in snaps) + 1
+    layer_props = draw_layer_properties(n_total, model, rng_at(cfg, run, 2))
+    elem_seed = int(seed_sequence(cfg, run, 2).generate_state(2, dtype=np.uint64)[1])
+    last = snaps[-1]
+    vp_e, rho_e = element_properties(last.ids, last.layer, layer_props, model, elem_seed)
+    fig, axes = plt.subplots(1, 2, figsize=(13, 3.4))
+    for ax, vals, lab in ((axes[0], vp_e, "Vp (m/s)"), (axes[1], rho_e, "density (kg/m³)")):
+        coll = _draw_particles(ax, last, np.zeros((last.n, 4)), values=vals, cmap="viridis")
+        ax.set_xlim(0, W)
+        ax.set_ylim(min(0.0, float(last.xy[:, 1].min())), H * 1.02)
+        fig.colorbar(coll, ax=ax, label=lab, shrink=0.8)
+    fig.suptitle(f"Particle-scale properties after deformation ({title})")
+    save(fig, "fig3_particle_properties.png")
+
+    # Figure 4: gridded fields before filtering
+    raw_mean, _ = rasterise(last.xy, last.radius, np.stack([vp_e, rho_e], axis=1), grid)
+    fig, axes = plt.subplots(1, 3, figsize=(16, 3.2))
+    for ax, img, lab in ((axes[0], raw_mean[..., 0], "Vp (m/s)"), (axes[1], raw_mean[..., 1], "density (kg/m³)"),
+                         (axes[2], raw_mean[..., 0] * raw_mean[..., 1], "impedance (kg/m²/s)")):
+        im = ax.imshow(img, extent=extent, cmap="viridis", aspect="equal")
+        fig.colorbar(im, ax=ax, label=lab, shrink=0.8)
+    fig.suptitle("Gridded fields before filtering (white = no element covers the cell centre)")
+    save(fig, "fig4_gridded.png")
+
+    # Figure 5: section with the particles overlaid, and labels
+    vp_g, rho_g = property_grids(last.xy, last.radius, vp_e, rho_e, last.layer, grid, model)
+    fmax = max(r.freq_hz for r in spec.renders)
+    sec = synthetic_sections(vp_g, rho_g, grid.cell_m, [fmax])[0]
+    clip = float(np.percentile(np.abs(sec), 99)) or 1.0
+    hist = strain_history(snaps)
+    maps = label_maps(last, hist[-1], grid, cfg.labels)
+    fig, axes = plt.subplots(1, 3, figsize=(18, 3.4))
+    axes[0].imshow(sec, extent=extent, cmap="seismic", vmin=-clip, vmax=clip, aspect="equal")
+    axes[0].set_title(f"(a) {fmax:g} Hz section")
+    axes[1].imshow(sec, extent=extent, cmap="gray", vmin=-clip, vmax=clip, aspect="equal")
+    _draw_particles(axes[1], last, np.concatenate([layer_colors(last.layer, n_pre)[:, :3],
+                                                   np.full((last.n, 1), 0.35)], axis=1), alpha_deposited=0.2)
+    axes[1].set_xlim(extent[0], extent[1])
+    axes[1].set_ylim(extent[2], extent[3])
+    axes[1].set_title("(b) with the final DEM elements overlaid")
+    axes[2].imshow(sec, extent=extent, cmap="gray", vmin=-clip, vmax=clip, aspect="equal")
+    dmg = np.ma.masked_equal(maps["damage"], 0)
+    axes[2].imshow(dmg, extent=extent, cmap="autumn_r", alpha=0.6, vmin=1, vmax=2, aspect="equal")
+    axes[2].set_title("(c) labels: damage zone (yellow), fault (red)")
+    save(fig, "fig5_section_overlay.png")
+
+    # Figure 6: frequency panel across snapshots
+    freqs = [20.0, 40.0, 60.0]
+    show = snaps if len(snaps) <= 4 else [snaps[i] for i in np.linspace(0, len(snaps) - 1, 4).round().astype(int)]
+    fig, axes = plt.subplots(len(freqs), len(show), figsize=(4.6 * len(show), 2.0 * len(freqs)), squeeze=False)
+    for j, s in enumerate(show):
+        ve, re_ = element_properties(s.ids, s.layer, layer_props, model, elem_seed)
+        vg, rg = property_grids(s.xy, s.radius, ve, re_, s.layer, grid, model)
+        secs = synthetic_sections(vg, rg, grid.cell_m, freqs)
+        for i, f in enumerate(freqs):
+            c = float(np.percentile(np.abs(secs[i]), 99)) or 1.0
+            axes[i, j].imshow(secs[i], extent=extent, cmap="gray", vmin=-c, vmax=c, aspect="equal")
+            axes[i, j].set_xticks([])
+            axes[i, j].set_yticks([])
+            if j == 0:
+                axes[i, j].set_ylabel(f"{f:g} Hz")
+            if i == 0:
+                axes[i, j].set_title(f"snapshot {s.index} (throw {s.throw_m:.0f} m)", fontsize=9)
+    fig.suptitle("Frequency sensitivity across the deformation sequence")
+    save(fig, "fig6_frequency.png")
+    return written

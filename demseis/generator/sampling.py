@@ -1,0 +1,104 @@
+"""From a :class:`Config` to concrete runs and renders, with one SeedSequence tree.
+
+Seed tree (spawn keys under the sweep seed)::
+
+    (run,)                 the run's root
+    (run, 0)               run-level parameter draws
+    (run, 1)               the DEM (packing, settling, sedimentation)
+    (run, 2)               rock properties (per-layer draws; per-element scatter seed)
+    (run, 3, sample)       one sample's render draws and noise
+
+A run's values depend only on the sweep seed and the run index, never on worker count or order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from demseis.generator.config import Config, _cross, all_params
+from demseis.generator.params import DistSpec, Fixed, GridSpec
+
+
+def seed_sequence(cfg: Config, *key: int) -> np.random.SeedSequence:
+    """The SeedSequence at ``key`` in the sweep's tree."""
+    return np.random.SeedSequence(cfg.sweep.seed, spawn_key=tuple(int(k) for k in key))
+
+
+def rng_at(cfg: Config, *key: int) -> np.random.Generator:
+    """A Generator seeded from the tree node ``key``."""
+    return np.random.default_rng(seed_sequence(cfg, *key))
+
+
+@dataclass(frozen=True)
+class Render:
+    """One rendered sample of a snapshot."""
+
+    sample: int  # index within the run
+    snapshot: int
+    freq_hz: float
+    snr_db: float
+    noise_kind: str
+    seed: int  # 64-bit seed of the noise Generator
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """Everything one DEM run and its renders need."""
+
+    run: int
+    params: dict[str, Any]  # run-level parameter values
+    renders: tuple[Render, ...]
+
+
+def run_params(cfg: Config, run: int) -> dict[str, Any]:
+    """Run-level parameter values of run ``run``.
+
+    Run-level grids are crossed (in key order) and cycled over the runs: run ``i`` takes
+    combination ``i mod G``. Distributions are drawn from node ``(run, 0)`` in key order.
+    """
+    pdefs = all_params()
+    run_specs = {k: s for k, s in cfg.sweep.params.items() if pdefs[k].level == "run"}
+    combos = _cross(run_specs)
+    combo = combos[run % len(combos)]
+    rng = rng_at(cfg, run, 0)
+    out: dict[str, Any] = {}
+    for key, spec in combo.items():
+        if isinstance(spec, Fixed):
+            out[key] = spec.value
+        elif isinstance(spec, DistSpec):
+            out[key] = spec.sample(rng)
+        else:
+            out[key] = spec
+    return out
+
+
+def plan_run(cfg: Config, run: int) -> RunSpec:
+    """Run-level values and the list of renders (samples) of run ``run``."""
+    renders = []
+    combos = cfg.render_grid()
+    sample = 0
+    for snap in range(cfg.model.n_snapshots):
+        for combo in combos:
+            for _ in range(cfg.sweep.renders_per_snapshot):
+                ss = seed_sequence(cfg, run, 3, sample)
+                rng = np.random.default_rng(ss)
+                vals = {}
+                for key in ("freq_hz", "snr_db", "noise_kind"):
+                    spec = combo[key]
+                    if isinstance(spec, Fixed):
+                        vals[key] = spec.value
+                    elif isinstance(spec, DistSpec):
+                        vals[key] = spec.sample(rng)
+                    elif isinstance(spec, GridSpec):  # pragma: no cover - crossed away
+                        raise AssertionError(key)
+                    else:
+                        vals[key] = spec
+                noise_seed = int(ss.generate_state(2, dtype=np.uint64)[1])
+                renders.append(Render(sample=sample, snapshot=snap, freq_hz=float(vals["freq_hz"]),
+                                      snr_db=float(vals["snr_db"]), noise_kind=str(vals["noise_kind"]),
+                                      seed=noise_seed))
+                sample += 1
+    return RunSpec(run=run, params=run_params(cfg, run), renders=tuple(renders))

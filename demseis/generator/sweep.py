@@ -1,0 +1,288 @@
+"""The sweep: every DEM run of a config, one dask task per run, each writing its own shard.
+
+Only this driver creates the store, writes root attributes and consolidates metadata (once, at
+the end); a task writes the array data of exactly one shard, then that shard's done flag. A
+rerun on the same store completes only the shards that are not done, so an interrupted sweep
+resumes where it stopped and gives the same bytes as an uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from demseis.errors import ConfigError, SimulationError, StoreError
+from demseis.generator.config import Config, parse_config
+from demseis.generator.pipeline import array_dtypes, grid_of, param_dtypes, run_shard, PARAM_CODES
+
+#: element-steps per second of one core, used only for ``--dry-run`` time estimates
+DRY_RUN_ELEMENT_STEPS_PER_S = 5.0e6
+
+
+@dataclass
+class SweepSummary:
+    """What a sweep did."""
+
+    store: str
+    n_shards: int
+    samples_per_shard: int
+    done_before: int
+    completed: list[int] = field(default_factory=list)
+    failed: dict[int, str] = field(default_factory=dict)
+    seconds: float = 0.0
+
+    @property
+    def n_samples_written(self) -> int:
+        return len(self.completed) * self.samples_per_shard
+
+    def lines(self) -> list[str]:
+        out = [
+            f"store: {self.store}",
+            f"shards: {self.n_shards} ({self.samples_per_shard} samples each); "
+            f"{self.done_before} already done, {len(self.completed)} written now, "
+            f"{len(self.failed)} failed",
+            f"time: {self.seconds:.1f} s"
+            + (f", {self.n_samples_written / self.seconds:.2f} samples/s" if self.seconds > 0 and self.completed else ""),
+        ]
+        for shard, err in sorted(self.failed.items()):
+            out.append(f"  run {shard} failed: {err}")
+        if self.failed:
+            out.append("rerun the same command to retry the failed runs")
+        return out
+
+
+def store_attrs(cfg: Config) -> dict[str, Any]:
+    """Root attributes the driver writes when it creates a store."""
+    grid = grid_of(cfg)
+    return {
+        "config": cfg.to_dict(),
+        "grid": {"x0_m": grid.x0_m, "top_m": grid.top_m, "cell_m": grid.cell_m,
+                 "nz": grid.nz, "nx": grid.nx},
+        "param_codes": {k: list(v) for k, v in PARAM_CODES.items()},
+    }
+
+
+def _first_difference(a: Any, b: Any, path: str = "") -> str | None:
+    if isinstance(a, dict) and isinstance(b, dict):
+        for key in sorted(set(a) | set(b)):
+            if key not in a or key not in b:
+                return f"{path}{key}"
+            d = _first_difference(a[key], b[key], f"{path}{key}.")
+            if d:
+                return d
+        return None
+    return None if a == b else path.rstrip(".")
+
+
+def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> np.ndarray:
+    """Create the store, or check that an existing one was written with this config.
+
+    Returns the per-shard status (1 = done).
+    """
+    from demseis.datasets import create_store, read_store_attrs, shard_status
+
+    out = Path(out)
+    attrs = store_attrs(cfg)
+    if out.exists() and not overwrite:
+        stored = read_store_attrs(out)  # raises StoreError for a foreign path
+        old = json.loads(json.dumps(stored.get("config")))
+        new = json.loads(json.dumps(attrs["config"]))
+        if old != new:
+            diff = _first_difference(old, new) or "config"
+            raise ConfigError(
+                f"store {str(out)!r} was written with a different config (first difference: "
+                f"{diff}); use --overwrite to replace it, or choose another --out"
+            )
+        return shard_status(out)
+    create_store(
+        out,
+        n_shards=cfg.sweep.n_runs,
+        samples_per_shard=cfg.samples_per_run,
+        shape=grid_of(cfg).shape,
+        arrays=array_dtypes(cfg),
+        params=param_dtypes(),
+        attrs=attrs,
+        overwrite=overwrite,
+    )
+    return shard_status(out)
+
+
+def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, Any]:
+    """Run DEM run ``shard`` and write its shard. Runs in a dask worker (or in-process).
+
+    An unstable simulation is returned as an error record (retrying it would fail the same
+    way); any other exception propagates so that dask retries the task.
+    """
+    from demseis.datasets import write_shard
+
+    cfg = parse_config(cfg_dict)
+    t0 = time.perf_counter()
+    try:
+        data = run_shard(cfg, shard)
+    except SimulationError as exc:
+        return {"shard": shard, "error": f"SimulationError: {exc}"}
+    write_shard(store, shard, data.arrays, data.params, data.snapshots)
+    return {"shard": shard, "seconds": time.perf_counter() - t0,
+            "samples": int(data.arrays["seismic"].shape[0])}
+
+
+def warm_numba_cache() -> None:
+    """Compile (or load from cache) every kernel by running a minute model in this process.
+
+    Workers then load the cached machine code instead of each compiling it again.
+    """
+    from demseis.generator.config import load_config
+    from demseis.generator.pipeline import render_run, simulate_run
+    from demseis.generator.sampling import plan_run
+
+    raw_cfg = load_config(preset="tiny").to_dict()
+    raw_cfg["sweep"]["n_runs"] = 1
+    raw_cfg["model"]["n_snapshots"] = 2
+    cfg = parse_config(raw_cfg)
+    spec = plan_run(cfg, 0)
+    snaps, info = simulate_run(cfg, spec)
+    render_run(cfg, spec, snaps, info)
+
+
+def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
+    """Human lines describing the sweep without computing it."""
+    grid = grid_of(cfg)
+    S = cfg.samples_per_run
+    n_runs = cfg.sweep.n_runs if pending is None else pending
+    bytes_per_sample = sum(np.dtype(d).itemsize for d in array_dtypes(cfg).values()) * grid.nz * grid.nx
+    m = cfg.model
+    mean_r2 = (m.radius_min_m**2 + m.radius_min_m * m.radius_max_m + m.radius_max_m**2) / 3
+    n_elem = 0.82 * m.width_m * m.height_m / (math.pi * mean_r2)
+    from demseis.generator.params import spec_values_hint
+
+    throw_hi = spec_values_hint(cfg.sweep.params["throw_m"])[1]
+    dip_lo = spec_values_hint(cfg.sweep.params["dip_deg"])[0]
+    kn_lo = spec_values_hint(cfg.sweep.params["kn_n_m"])[0]
+    rho_hi = spec_values_hint(cfg.sweep.params["density_kg_m3"])[1]
+    dt = 0.25 * math.sqrt(rho_hi * math.pi * m.radius_min_m**2 / kn_lo)
+    path_m = throw_hi / math.sin(math.radians(dip_lo))
+    steps = path_m / m.wall_speed_m_s / dt + 20000
+    secs = n_elem * steps / DRY_RUN_ELEMENT_STEPS_PER_S
+    return [
+        f"config: {cfg.name} (seed {cfg.sweep.seed})",
+        f"DEM runs: {n_runs} to compute (of {cfg.sweep.n_runs}); ~{n_elem:,.0f} elements each",
+        f"samples: {n_runs * S} ({cfg.model.n_snapshots} snapshots x "
+        f"{cfg.renders_per_run_snapshot} renders per run)",
+        f"sample shape: {grid.nz} x {grid.nx} cells of {grid.cell_m:g} m; arrays: "
+        + ", ".join(f"{k} {v}" for k, v in array_dtypes(cfg).items()),
+        f"size on disk: at most {n_runs * S * bytes_per_sample / 2**20:,.1f} MiB (uncompressed) "
+        "plus particle snapshots",
+        f"estimated time: up to ~{secs * n_runs / 60:,.1f} core-minutes "
+        f"(~{secs:,.0f} s per run on one core at most, at {DRY_RUN_ELEMENT_STEPS_PER_S:.0e} element-steps/s)",
+    ]
+
+
+def run_sweep(
+    cfg: Config,
+    out: str | Path,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    overwrite: bool = False,
+    progress: bool = True,
+    retries: int = 2,
+) -> SweepSummary:
+    """Run (or resume) the sweep of ``cfg`` into the store ``out``.
+
+    Parameters
+    ----------
+    workers : number of LocalCluster worker processes (default: all cores). ``0`` runs every
+        task in this process without dask (useful for debugging).
+    scheduler : address of an existing dask scheduler; overrides ``workers``.
+    overwrite : replace an existing store written with another config.
+    progress : show a progress bar on stderr.
+    retries : dask retries of a task whose worker died.
+    """
+    from demseis.datasets import finalize_store, record_failures
+
+    out = Path(out)
+    t0 = time.perf_counter()
+    status = prepare_store(cfg, out, overwrite=overwrite)
+    pending = [int(i) for i in np.flatnonzero(status != 1)]
+    summary = SweepSummary(store=str(out), n_shards=len(status), samples_per_shard=cfg.samples_per_run,
+                           done_before=len(status) - len(pending))
+    cfg_dict = cfg.to_dict()
+    bar = _progress_bar(len(pending) * cfg.samples_per_run, progress)
+    try:
+        if pending:
+            if workers == 0 and scheduler is None:
+                for shard in pending:
+                    _account(summary, bar, shard_task(str(out), cfg_dict, shard), None)
+            else:
+                _run_distributed(str(out), cfg_dict, pending, summary, bar, workers, scheduler, retries)
+    finally:
+        bar.close()
+    record_failures(out, summary.failed)
+    finalize_store(out)
+    summary.seconds = time.perf_counter() - t0
+    return summary
+
+
+def _account(summary: SweepSummary, bar: Any, result: dict[str, Any] | None, error: str | None) -> None:
+    if error is not None:
+        return
+    assert result is not None
+    if "error" in result:
+        summary.failed[result["shard"]] = result["error"]
+    else:
+        summary.completed.append(result["shard"])
+        bar.update(result["samples"])
+
+
+def _run_distributed(store: str, cfg_dict: dict[str, Any], pending: list[int], summary: SweepSummary,
+                     bar: Any, workers: int | None, scheduler: str | None, retries: int) -> None:
+    import dask
+    from distributed import Client, LocalCluster, as_completed
+
+    cluster = None
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError) as exc:
+            raise StoreError(f"--scheduler {scheduler!r}: cannot connect ({exc})") from None
+    else:
+        warm_numba_cache()
+        n = workers or os.cpu_count() or 1
+        env = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+               "OPENBLAS_NUM_THREADS": "1"}
+        os.environ.update(env)  # inherited by the spawned worker processes
+        with dask.config.set({"distributed.worker.daemon": False,
+                              "distributed.scheduler.allowed-failures": retries + 1}):
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, env=env, silence_logs=40)
+            client = Client(cluster)
+    try:
+        futures = client.map(shard_task, [store] * len(pending), [cfg_dict] * len(pending), pending,
+                             retries=retries, pure=False,
+                             key=[f"demseis-shard-{s}-{os.getpid()}" for s in pending])
+        shard_of = {f.key: s for f, s in zip(futures, pending)}
+        for fut in as_completed(futures):
+            if fut.status == "finished":
+                _account(summary, bar, fut.result(), None)
+            else:
+                exc = fut.exception()
+                summary.failed[shard_of[fut.key]] = f"{type(exc).__name__}: {exc}"
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _progress_bar(total: int, enabled: bool) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="sample", desc="generate", disable=not enabled,
+                file=sys.stderr, dynamic_ncols=True)
