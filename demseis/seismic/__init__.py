@@ -1,1 +1,41 @@
-"""demseis.seismic: properties, rasterisation, impedance, reflectivity, wavelets, noise."""
+"""demseis.seismic: properties, rasterisation, impedance, reflectivity, wavelets, noise.
+
+The per-snapshot render the generator does::
+
+    layer_props = draw_layer_properties(n_layers_total, model, rng)
+    vp_e, rho_e = element_properties(snap.ids, snap.layer, layer_props, model, seed)
+    vp_g, rho_g = property_grids(snap.xy, snap.radius, vp_e, rho_e, snap.layer, grid, model)
+    sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs_hz)        # (nf, nz, nx)
+    noisy = add_noise(sections[k], snr_db, "band", rng)
+
+See ``docs/seismic.md`` for the physics, conventions and measured accuracy and speed.
+"""
+
+from demseis.seismic.forward import (
+    convolve,
+    depth_to_time,
+    impedance,
+    interface_times,
+    reflectivity,
+    synthetic_sections,
+    time_axis,
+)
+from demseis.seismic.grid import Grid
+from demseis.seismic.noise import add_noise, rms, snr_db
+from demseis.seismic.properties import (
+    LayerProperties,
+    PropertyModel,
+    draw_layer_properties,
+    element_properties,
+    property_grids,
+    smooth,
+)
+from demseis.seismic.raster import rasterise
+from demseis.seismic.wavelet import ricker
+
+__all__ = [
+    "Grid", "rasterise", "ricker", "reflectivity", "impedance", "convolve", "PropertyModel",
+    "LayerProperties", "draw_layer_properties", "element_properties", "property_grids", "smooth",
+    "synthetic_sections", "interface_times", "time_axis", "depth_to_time", "add_noise", "rms",
+    "snr_db",
+]

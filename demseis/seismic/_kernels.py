@@ -1,4 +1,7 @@
-"""Numba kernels of the seismic stage. Plain arrays in, plain arrays out; SI units."""
+"""Numba kernels of the seismic stage. Plain arrays in, plain arrays out; SI units.
+
+Every kernel here has a slow, obvious NumPy/SciPy reference in ``tests/seismic``.
+"""
 
 from __future__ import annotations
 
@@ -20,25 +23,26 @@ def rasterise_sum(x, y, radius, values, x0, top, cell, nz, nx, out_sum, out_coun
     out_count : (nz, nx) int32, incremented with the number of contributing elements.
 
     A cell (i, j) has centre (x0 + (j + 0.5) cell, top - (i + 0.5) cell); element e contributes
-    when (xc - x_e)^2 + (yc - y_e)^2 <= r_e^2.
+    when (xc - x_e)^2 + (yc - y_e)^2 <= r_e^2. The candidate cell range of each disk is widened
+    by one cell on every side so that rounding in the bounds can never drop a cell whose centre
+    lies exactly on a disk's rim; the distance test alone decides.
     """
     n = x.shape[0]
     k = values.shape[1]
     for e in range(n):
         r = radius[e]
         r2 = r * r
-        j0 = int(np.ceil((x[e] - r - x0) / cell - 0.5))
-        j1 = int(np.floor((x[e] + r - x0) / cell - 0.5))
-        i0 = int(np.ceil((top - (y[e] + r)) / cell - 0.5))
-        i1 = int(np.floor((top - (y[e] - r)) / cell - 0.5))
-        if j0 < 0:
-            j0 = 0
-        if i0 < 0:
-            i0 = 0
-        if j1 > nx - 1:
-            j1 = nx - 1
-        if i1 > nz - 1:
-            i1 = nz - 1
+        fj0 = np.ceil((x[e] - r - x0) / cell - 0.5) - 1.0
+        fj1 = np.floor((x[e] + r - x0) / cell - 0.5) + 1.0
+        fi0 = np.ceil((top - (y[e] + r)) / cell - 0.5) - 1.0
+        fi1 = np.floor((top - (y[e] - r)) / cell - 0.5) + 1.0
+        # clamp in float first: elements far outside the grid must not overflow int
+        if fj1 < 0.0 or fi1 < 0.0 or fj0 > nx - 1.0 or fi0 > nz - 1.0:
+            continue
+        j0 = max(int(fj0), 0)
+        j1 = min(int(fj1), nx - 1)
+        i0 = max(int(fi0), 0)
+        i1 = min(int(fi1), nz - 1)
         for i in range(i0, i1 + 1):
             yc = top - (i + 0.5) * cell
             dy = yc - y[e]
@@ -49,3 +53,197 @@ def rasterise_sum(x, y, radius, values, x0, top, cell, nz, nx, out_sum, out_coun
                     out_count[i, j] += 1
                     for c in range(k):
                         out_sum[i, j, c] += values[e, c]
+
+
+@njit(cache=True)
+def correlate_rows_cols(a, weights, out):
+    """Separable correlation with a symmetric 1-D kernel along both axes, edge-replicated.
+
+    Parameters
+    ----------
+    a : (nz, nx) float64 input field.
+    weights : (2 h + 1,) float64 symmetric kernel (e.g. normalised Gaussian weights).
+    out : (nz, nx) float64 output, written.
+
+    Equals ``scipy.ndimage.correlate1d`` along axis 0 then axis 1 with ``mode="nearest"``
+    (the boundary value is repeated), which is what ``scipy.ndimage.gaussian_filter`` does.
+    """
+    nz, nx = a.shape
+    h = weights.shape[0] // 2
+    tmp = np.empty((nz, nx))
+    for i in range(nz):
+        for j in range(nx):
+            tmp[i, j] = 0.0
+        for q in range(-h, h + 1):
+            ii = min(max(i + q, 0), nz - 1)
+            w = weights[q + h]
+            for j in range(nx):
+                tmp[i, j] += w * a[ii, j]
+    for i in range(nz):
+        for j in range(nx):
+            s = 0.0
+            for q in range(-h, h + 1):
+                jj = min(max(j + q, 0), nx - 1)
+                s += weights[q + h] * tmp[i, jj]
+            out[i, j] = s
+
+
+@njit(cache=True, inline="always")
+def _med3(a, b, c):
+    """Median of three values, branch-free."""
+    return max(min(a, b), min(max(a, b), c))
+
+
+@njit(cache=True)
+def _median3(a, out):
+    """3 x 3 median with edge replication (Paeth / Smith's network).
+
+    Each column triple (rows i-1, i, i+1) is sorted once per row into lo <= mid <= hi; the
+    median of the 9 values is med3(max(lo), med3(mid), min(hi)) over the three columns, which
+    is exact for 9 values.
+    """
+    nz, nx = a.shape
+    lo = np.empty(nx + 2)
+    md = np.empty(nx + 2)
+    hi = np.empty(nx + 2)
+    for i in range(nz):
+        up = max(i - 1, 0)
+        dn = min(i + 1, nz - 1)
+        for j in range(nx):
+            x = a[up, j]
+            y = a[i, j]
+            z = a[dn, j]
+            l1 = min(x, y)
+            h1 = max(x, y)
+            lo[j + 1] = min(l1, z)
+            hz = max(l1, z)
+            md[j + 1] = min(h1, hz)
+            hi[j + 1] = max(h1, hz)
+        lo[0] = lo[1]
+        md[0] = md[1]
+        hi[0] = hi[1]
+        lo[nx + 1] = lo[nx]
+        md[nx + 1] = md[nx]
+        hi[nx + 1] = hi[nx]
+        for j in range(nx):
+            mx_lo = max(max(lo[j], lo[j + 1]), lo[j + 2])
+            mn_hi = min(min(hi[j], hi[j + 1]), hi[j + 2])
+            m_md = _med3(md[j], md[j + 1], md[j + 2])
+            out[i, j] = _med3(mx_lo, m_md, mn_hi)
+
+
+@njit(cache=True)
+def median_filter_square(a, size, out):
+    """Median over a ``size`` x ``size`` window (odd size), edge-replicated.
+
+    Parameters
+    ----------
+    a : (nz, nx) float64 input field.
+    size : odd window width in cells (3, 5, ...).
+    out : (nz, nx) float64 output, written.
+
+    Equals ``scipy.ndimage.median_filter(a, size, mode="nearest")``. The window is gathered
+    into a small buffer and partially sorted by insertion (windows are tiny: 9 or 25 values).
+    """
+    nz, nx = a.shape
+    if size == 3:
+        _median3(a, out)
+        return
+    h = size // 2
+    m = size * size
+    mid = m // 2
+    buf = np.empty(m)
+    for i in range(nz):
+        for j in range(nx):
+            c = 0
+            for p in range(-h, h + 1):
+                ii = min(max(i + p, 0), nz - 1)
+                for q in range(-h, h + 1):
+                    jj = min(max(j + q, 0), nx - 1)
+                    v = a[ii, jj]
+                    # insertion into the sorted prefix buf[:c]
+                    t = c
+                    while t > 0 and buf[t - 1] > v:
+                        buf[t] = buf[t - 1]
+                        t -= 1
+                    buf[t] = v
+                    c += 1
+            out[i, j] = buf[mid]
+
+
+@njit(cache=True)
+def convolve_spikes(t_spike, amp, t_out, tables, inv_step, half_s, out):
+    """Continuous-time convolution of per-column spike trains with tabulated even wavelets.
+
+    For every wavelet f, column c and output time t = t_out[c, q]::
+
+        out[f, c, q] = sum_i amp[c, i] * w_f(t - t_spike[c, i])      over |t - t_spike| <= half_s[f]
+
+    which is equation (6) of the paper, s(t) = (r * w)(t), for r(t) = sum_i a_i delta(t - t_i),
+    evaluated exactly at arbitrary (non-uniform) output times: no resampling of reflectivity.
+
+    Parameters
+    ----------
+    t_spike : (nx, m) float64 spike (interface) two-way times per column (s), ascending.
+    amp : (nx, m) float64 spike amplitudes (reflection coefficients).
+    t_out : (nx, k) float64 output times per column (s), ascending.
+    tables : (nf, ntab) float64, ``tables[f, p] = w_f(p / inv_step[f])`` for p = 0..ntab-1, the
+        even wavelet tabulated on [0, half_s[f]]; linear interpolation between entries.
+    inv_step : (nf,) float64 reciprocal of the table step (1/s).
+    half_s : (nf,) float64 wavelet half-width (s); beyond it the wavelet is taken as zero.
+    out : (nf, nx, k) float64 output, written.
+    """
+    nx, m = t_spike.shape
+    k = t_out.shape[1]
+    nf = tables.shape[0]
+    ntab = tables.shape[1]
+    for f in range(nf):
+        hw = half_s[f]
+        ih = inv_step[f]
+        for c in range(nx):
+            lo = 0
+            for q in range(k):
+                t = t_out[c, q]
+                while lo < m and t_spike[c, lo] < t - hw:
+                    lo += 1
+                s = 0.0
+                i = lo
+                while i < m:
+                    tau = t - t_spike[c, i]
+                    if tau < -hw:
+                        break
+                    if tau < 0.0:
+                        tau = -tau
+                    u = tau * ih
+                    p = int(u)
+                    if p < ntab - 1:
+                        w0 = tables[f, p]
+                        s += amp[c, i] * (w0 + (u - p) * (tables[f, p + 1] - w0))
+                    i += 1
+                out[f, c, q] = s
+
+
+@njit(cache=True)
+def containing_cell(t_bottom, t_s, out):
+    """Index of the cell whose two-way-time span contains each time sample, per column.
+
+    Parameters
+    ----------
+    t_bottom : (nx, nz) float64 two-way time (s) of the bottom edge of every cell, ascending
+        down each column; the top edge of cell 0 is at t = 0.
+    t_s : (nt,) float64 output times (s), ascending.
+    out : (nx, nt) int64 output, written: j with t_bottom[c, j-1] <= t < t_bottom[c, j]
+        (t_bottom[c, -1] read as 0), or -1 when t < 0 or t >= t_bottom[c, nz-1].
+    """
+    nx, nz = t_bottom.shape
+    nt = t_s.shape[0]
+    for c in range(nx):
+        j = 0
+        for q in range(nt):
+            t = t_s[q]
+            if t < 0.0:
+                out[c, q] = -1
+                continue
+            while j < nz and t_bottom[c, j] <= t:
+                j += 1
+            out[c, q] = j if j < nz else -1

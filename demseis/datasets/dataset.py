@@ -1,0 +1,352 @@
+"""PyTorch access to a demseis store: :class:`FaultSegDataset` and :class:`ShardAwareSampler`.
+
+Neither class imports torch at module import time, and neither subclasses torch's classes
+(``DataLoader`` only needs ``__len__``/``__getitem__`` and an iterable sampler), so
+``demseis.datasets`` stays light for the dask workers that only write stores.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from demseis.datasets.store import SAMPLE_ARRAYS, open_store, store_layout
+from demseis.errors import InputError
+
+SPLITS = ("train", "val", "test")
+
+
+def split_of_shards(n_shards: int, fractions: Sequence[float] = (0.8, 0.1, 0.1),
+                    seed: int = 0) -> np.ndarray:
+    """Split label (0 train, 1 val, 2 test) of every shard, i.e. of every DEM run.
+
+    The shards (one DEM run each) are permuted with ``numpy.random.default_rng(seed)`` and cut
+    at the cumulative fractions: val and test get ``round(f * n_shards)`` shards each (at least
+    one when their fraction is positive and there are at least three shards), train the rest.
+    It depends only on ``n_shards``, ``fractions`` and ``seed``, not on which shards are done,
+    so a run never changes split when a store is resumed.
+
+    Returns
+    -------
+    (n_shards,) int8 array
+    """
+    f = np.asarray(fractions, dtype=float)
+    if f.shape != (3,) or (f < 0).any() or not np.isclose(f.sum(), 1.0):
+        raise InputError(
+            f"split_fractions must be three non-negative fractions (train, val, test) summing to "
+            f"1, got {tuple(fractions)!r}"
+        )
+    n = int(n_shards)
+    n_val, n_test = (int(round(x * n)) for x in f[1:])
+    if n >= 3:
+        n_val = max(n_val, 1) if f[1] > 0 else 0
+        n_test = max(n_test, 1) if f[2] > 0 else 0
+    n_val = min(n_val, n)
+    n_test = min(n_test, n - n_val)
+    labels = np.zeros(n, dtype=np.int8)
+    order = np.random.default_rng(seed).permutation(n)
+    labels[order[n - n_val - n_test: n - n_test]] = 1
+    labels[order[n - n_test:]] = 2
+    return labels
+
+
+def _where_mask(where: Any, params: Mapping[str, np.ndarray], n: int) -> np.ndarray:
+    """Boolean mask of the samples selected by ``where`` (see :class:`FaultSegDataset`)."""
+    if where is None:
+        return np.ones(n, dtype=bool)
+    if callable(where):
+        mask = np.asarray(where(params))
+        if mask.shape != (n,) or mask.dtype != bool:
+            raise InputError(
+                f"where(params) must return a ({n},) bool array, got {mask.dtype} {mask.shape}"
+            )
+        return mask
+    if not isinstance(where, Mapping):
+        raise InputError(f"where must be None, a dict or a callable, got {type(where).__name__}")
+    mask = np.ones(n, dtype=bool)
+    for name, cond in where.items():
+        if name not in params:
+            raise InputError(f"where: unknown parameter {name!r}; stored: {sorted(params)}")
+        v = params[name]
+        if isinstance(cond, tuple):
+            if len(cond) != 2:
+                raise InputError(f"where[{name!r}]: a range is (low, high), got {cond!r}")
+            lo, hi = cond
+            m = np.ones(n, dtype=bool)
+            if lo is not None:
+                m &= v >= lo
+            if hi is not None:
+                m &= v <= hi
+        elif isinstance(cond, (list, set, frozenset, np.ndarray)):
+            m = np.zeros(n, dtype=bool)
+            for c in cond:
+                m |= _equal(v, c)
+        else:
+            m = _equal(v, cond)
+        mask &= m
+    return mask
+
+
+def _equal(v: np.ndarray, c: Any) -> np.ndarray:
+    if v.dtype.kind == "f" and np.isfinite(c):
+        # parameters are float32 on disk: compare at float32 precision
+        return np.isclose(v, c, rtol=1e-6, atol=0.0)
+    return v == c
+
+
+class FaultSegDataset:
+    """A map-style PyTorch dataset over the done shards of a demseis store.
+
+    Parameters
+    ----------
+    path : store directory.
+    inputs : sample arrays stacked as input channels, e.g. ``("seismic",)``.
+    targets : sample arrays returned as targets, e.g. ``("fault",)``.
+    where : sample filter on the per-sample parameters. None (all), a dict
+        ``name -> value`` (equal; floats at float32 precision), ``name -> (low, high)``
+        (inclusive range, either end None), ``name -> [v1, v2, ...]`` (any of), several keys
+        combined with AND; or a callable ``f(params) -> (N,) bool`` where ``params`` maps every
+        parameter name to its (N,) array over all samples.
+    split : None (every run) or ``"train"``, ``"val"``, ``"test"``: the samples of the DEM runs
+        in that split (:func:`split_of_shards`). Splits never share a run.
+    split_fractions : (train, val, test) fractions of runs.
+    split_seed : seed of the run permutation (fixed: the same store gives the same split).
+    crop : None (whole samples), an int (square) or (h, w): a random window, the same for the
+        inputs and the targets of one sample.
+    transform : callable ``(x, y) -> (x, y)`` applied to the tensors of each item.
+    seed : seed of the crop positions. The window of sample ``i`` in epoch ``e`` is drawn from
+        ``default_rng([seed, e, i])``, so it does not depend on worker count or order.
+
+    Items
+    -----
+    ``(x, y)`` where ``x`` is a float32 tensor (C, h, w) with one channel per input, and ``y``
+    is, for one target, a tensor (h, w): int64 for the label arrays (fault, damage, layer),
+    float32 for strain/impedance/seismic; for several targets, a dict name -> such tensor.
+
+    Notes
+    -----
+    The store is opened lazily in each process; pickling keeps only the path, the options and
+    the selected sample indices (numbers), so the dataset works with ``num_workers > 0``. Reads
+    go through ``__getitems__``: a batch reads each shard it touches in one Zarr call per array,
+    so a :class:`ShardAwareSampler` (batches from few shards) makes epochs fast. Use
+    :meth:`set_epoch` between epochs to draw new crops (with non-persistent workers).
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        inputs: Sequence[str] = ("seismic",),
+        targets: Sequence[str] = ("fault",),
+        *,
+        where: Mapping[str, Any] | Callable[[Mapping[str, np.ndarray]], np.ndarray] | None = None,
+        split: str | None = None,
+        split_fractions: Sequence[float] = (0.8, 0.1, 0.1),
+        split_seed: int = 0,
+        crop: int | Sequence[int] | None = None,
+        transform: Callable | None = None,
+        seed: int = 0,
+    ) -> None:
+        self.path = str(path)
+        self.inputs = tuple(inputs) if not isinstance(inputs, str) else (inputs,)
+        self.targets = tuple(targets) if not isinstance(targets, str) else (targets,)
+        self.transform = transform
+        self.seed = int(seed)
+        self.epoch = 0
+        self.split = split
+        group = open_store(self.path, "r")
+        layout = store_layout(group)
+        self.layout = layout
+        if not self.inputs:
+            raise InputError("inputs is empty: give at least one sample array, e.g. ('seismic',)")
+        for name in self.inputs + self.targets:
+            if name not in layout.arrays:
+                raise InputError(
+                    f"array {name!r} is not in store {self.path!r}; it holds {list(layout.arrays)}"
+                )
+        if split is not None and split not in SPLITS:
+            raise InputError(f"split must be one of {SPLITS} or None, got {split!r}")
+        self.crop = _normalise_crop(crop, layout.shape)
+
+        s = layout.samples_per_shard
+        done = np.asarray(group["shard_done"][...]) == 1
+        sample_ok = np.repeat(done, s)
+        params = {n: np.asarray(group["params"][n][...]) for n in layout.params}
+        sample_ok &= _where_mask(where, params, layout.n_samples)
+        if split is not None:
+            labels = split_of_shards(layout.n_shards, split_fractions, split_seed)
+            sample_ok &= np.repeat(labels == SPLITS.index(split), s)
+        self.indices = np.nonzero(sample_ok)[0].astype(np.int64)
+        self._params = {n: v[self.indices] for n, v in params.items()}
+        self._arrays: dict[str, Any] | None = None
+
+    # -- pickling: path and numbers only; each worker reopens the store lazily
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["_arrays"] = None
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+
+    def __len__(self) -> int:
+        return int(self.indices.shape[0])
+
+    def set_epoch(self, epoch: int) -> None:
+        """Use crop windows of ``epoch`` (call before creating the epoch's iterator)."""
+        self.epoch = int(epoch)
+
+    @property
+    def run_ids(self) -> np.ndarray:
+        """(len,) DEM run id of each item (``params/run_id`` if stored, else the shard index)."""
+        if "run_id" in self._params:
+            return self._params["run_id"].astype(np.int64)
+        return self.indices // self.layout.samples_per_shard
+
+    @property
+    def shard_of_item(self) -> np.ndarray:
+        """(len,) shard index of each item."""
+        return self.indices // self.layout.samples_per_shard
+
+    def params(self, i: int) -> dict[str, Any]:
+        """Parameters of item ``i`` as a dict of Python scalars."""
+        return {n: v[i].item() for n, v in self._params.items()}
+
+    def _array(self, name: str):
+        if self._arrays is None:
+            group = open_store(self.path, "r")
+            self._arrays = {n: group[n] for n in set(self.inputs + self.targets)}
+        return self._arrays[name]
+
+    def _windows(self, globals_: np.ndarray) -> list[tuple[slice, slice]]:
+        h, w = self.layout.shape
+        if self.crop is None:
+            return [(slice(0, h), slice(0, w))] * len(globals_)
+        ch, cw = self.crop
+        out = []
+        for g in globals_.tolist():
+            rng = np.random.default_rng([self.seed, self.epoch, g])
+            r0 = int(rng.integers(0, h - ch + 1))
+            c0 = int(rng.integers(0, w - cw + 1))
+            out.append((slice(r0, r0 + ch), slice(c0, c0 + cw)))
+        return out
+
+    def _read_numpy(self, positions: Sequence[int]) -> dict[str, list[np.ndarray]]:
+        """Cropped arrays of items ``positions``: name -> list of (h, w) arrays, in order."""
+        pos = np.asarray(positions, dtype=np.int64)
+        if pos.ndim != 1:
+            raise InputError("positions must be a 1-D sequence of item indices")
+        n = len(self)
+        if pos.size and (pos.min() < -n or pos.max() >= n):
+            raise IndexError(f"item index out of range for a dataset of {n} items")
+        globals_ = self.indices[pos]
+        windows = self._windows(globals_)
+        names = list(dict.fromkeys(self.inputs + self.targets))
+        out = {name: [None] * len(pos) for name in names}
+        s = self.layout.samples_per_shard
+        shards = globals_ // s
+        for shard in np.unique(shards).tolist():
+            members = np.nonzero(shards == shard)[0]
+            wanted = np.unique(globals_[members])
+            lo, hi = int(wanted[0]), int(wanted[-1]) + 1
+            for name in names:
+                arr = self._array(name)
+                if hi - lo <= 2 * wanted.size:  # contiguous enough: one slice read
+                    block = arr[lo:hi]
+                    rows = wanted - lo
+                else:
+                    block = arr.get_orthogonal_selection((wanted, slice(None), slice(None)))
+                    rows = np.arange(wanted.size)
+                lookup = dict(zip(wanted.tolist(), rows.tolist()))
+                for m in members.tolist():
+                    rs, cs = windows[m]
+                    out[name][m] = block[lookup[int(globals_[m])], rs, cs]
+        return out
+
+    def _item(self, data: dict[str, list[np.ndarray]], m: int):
+        import torch
+
+        x = np.stack([data[n][m] for n in self.inputs]).astype(np.float32, copy=False)
+        ys = {}
+        for n in self.targets:
+            v = data[n][m]
+            v = v.astype(np.int64) if SAMPLE_ARRAYS[n].kind in "iu" else v.astype(np.float32)
+            ys[n] = torch.from_numpy(np.ascontiguousarray(v))
+        y = ys[self.targets[0]] if len(self.targets) == 1 else ys
+        xt = torch.from_numpy(np.ascontiguousarray(x))
+        if self.transform is not None:
+            xt, y = self.transform(xt, y)
+        return xt, y
+
+    def __getitem__(self, i: int):
+        data = self._read_numpy([int(i)])
+        return self._item(data, 0)
+
+    def __getitems__(self, indices: Sequence[int]) -> list:
+        """Items of a whole batch, reading each touched shard once per array."""
+        data = self._read_numpy(indices)
+        return [self._item(data, m) for m in range(len(indices))]
+
+
+def _normalise_crop(crop: Any, shape: tuple[int, int]) -> tuple[int, int] | None:
+    if crop is None:
+        return None
+    c = (int(crop), int(crop)) if np.isscalar(crop) else tuple(int(v) for v in crop)
+    if len(c) != 2 or min(c) < 1:
+        raise InputError(f"crop must be a positive int or (h, w), got {crop!r}")
+    if c[0] > shape[0] or c[1] > shape[1]:
+        raise InputError(f"crop {c} is larger than the samples {shape}")
+    return c
+
+
+class ShardAwareSampler:
+    """Epoch order that reads shards, not scattered samples.
+
+    Shards are visited in a random order; ``shards_per_block`` shards at a time have their
+    items shuffled together. With ``DataLoader(ds, batch_size=B, sampler=...)`` a batch then
+    spans at most ``shards_per_block + 1`` shards, each read with one Zarr call per array (see
+    :meth:`FaultSegDataset.__getitems__`). ``shards_per_block`` trades batch diversity (runs per
+    batch) for read speed.
+
+    Parameters
+    ----------
+    dataset : a :class:`FaultSegDataset` (uses its ``shard_of_item``).
+    shuffle : random shard order and item order within blocks; False gives store order.
+    shards_per_block : shards mixed together (>= 1).
+    seed : base seed; the order of epoch ``e`` comes from ``default_rng([seed, e])``.
+    """
+
+    def __init__(self, dataset: FaultSegDataset, *, shuffle: bool = True,
+                 shards_per_block: int = 2, seed: int = 0) -> None:
+        if int(shards_per_block) < 1:
+            raise InputError(f"shards_per_block must be >= 1, got {shards_per_block!r}")
+        self.shard_of_item = np.asarray(dataset.shard_of_item)
+        self.shuffle = bool(shuffle)
+        self.shards_per_block = int(shards_per_block)
+        self.seed = int(seed)
+        self.epoch = 0
+
+    def set_epoch(self, epoch: int) -> None:
+        """Use the order of ``epoch``."""
+        self.epoch = int(epoch)
+
+    def __len__(self) -> int:
+        return int(self.shard_of_item.shape[0])
+
+    def __iter__(self) -> Iterator[int]:
+        return iter(self.order().tolist())
+
+    def order(self) -> np.ndarray:
+        """The item order of the current epoch (a permutation of ``range(len)``)."""
+        items = np.arange(len(self))
+        if not self.shuffle:
+            return items
+        rng = np.random.default_rng([self.seed, self.epoch])
+        shards, inverse = np.unique(self.shard_of_item, return_inverse=True)
+        rank = np.empty(shards.size, dtype=np.int64)
+        rank[rng.permutation(shards.size)] = np.arange(shards.size)
+        block = rank[inverse] // self.shards_per_block
+        # sort by block, random order inside each block
+        return np.lexsort((rng.random(items.size), block))

@@ -1,0 +1,764 @@
+"""The demseis Zarr store: creation, shard writing, resume status, particles, finalisation.
+
+Layout (Zarr format 3, one group; see ``docs/store.md`` for the full schema)::
+
+    STORE/
+      zarr.json                  root attrs: demseis={schema_version, package_version}, config, grid,
+                                 failures (shard -> error text, written by the driver)
+      seismic, fault, damage,    (N, H, W) arrays, chunks (1, H, W), shards (S, H, W)
+      strain, layer[, impedance]
+      params/<name>              (N,) per-sample parameters, chunks (S,): one chunk per shard
+      shard_done                 (n_shards,) uint8, chunks (1,): 1 once a shard is complete
+      particles/run_<id:05d>/    particle snapshots of one DEM run (written by its shard task)
+
+Who writes what
+---------------
+- The driver alone calls :func:`create_store` (creates every array and writes the root attrs),
+  :func:`record_failures` and :func:`finalize_store` (consolidated metadata, once, at the end).
+- Exactly one task per shard calls :func:`write_shard`. It touches only the files of its own
+  shard (one shard file per sample array, one chunk per parameter array, its own particles
+  group and its own done-flag chunk), so concurrent tasks on distinct shards cannot lose data.
+  The done flag is cleared first and set last, and every file is written atomically
+  (write-then-rename by zarr's ``LocalStore``), so a task killed at any point leaves its shard
+  not-done and a retry rewrites it from scratch.
+
+Missing data is detectable: float arrays are filled with NaN and integer arrays with a sentinel
+outside their valid range (255 for uint8 labels, the dtype minimum for signed integers), so a
+chunk that was never written reads as an invalid value and :func:`validate_store` reports it.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import warnings
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from demseis import __version__
+from demseis.dem.types import Snapshot
+from demseis.errors import InputError, StoreError
+
+SCHEMA_VERSION = 1
+"""Version of the on-disk layout. Readers refuse stores of any other version."""
+
+SAMPLE_ARRAYS: dict[str, np.dtype] = {
+    "seismic": np.dtype("float32"),
+    "fault": np.dtype("uint8"),
+    "damage": np.dtype("uint8"),
+    "strain": np.dtype("float32"),
+    "layer": np.dtype("int16"),
+    "impedance": np.dtype("float32"),
+}
+"""Known per-sample arrays and their fixed dtypes."""
+
+DEFAULT_ARRAYS: tuple[str, ...] = ("seismic", "fault", "damage", "strain", "layer")
+"""Arrays written when ``arrays`` is not given (impedance is opt-in)."""
+
+LABEL_RANGES: dict[str, tuple[int, int | None]] = {
+    "fault": (0, 1),
+    "damage": (0, 2),
+    "layer": (0, None),
+}
+"""Inclusive valid value range of each integer label array (None: no upper bound)."""
+
+PARTICLE_FIELDS: dict[str, np.dtype] = {
+    "ids": np.dtype("int64"),
+    "x": np.dtype("float64"),
+    "y": np.dtype("float64"),
+    "radius": np.dtype("float64"),
+    "layer": np.dtype("int16"),
+    "deposited": np.dtype("bool"),
+    "offsets": np.dtype("int64"),
+    "index": np.dtype("int32"),
+    "step": np.dtype("int64"),
+    "throw_m": np.dtype("float64"),
+}
+"""Arrays of one ``particles/run_<id>`` group (the first six concatenated over snapshots)."""
+
+_ALLOWED_PARAM_KINDS = "iuf"
+
+
+# --------------------------------------------------------------------------------------------
+# small helpers
+
+
+def fill_value_for(dtype: np.dtype) -> Any:
+    """The fill value marking never-written data for ``dtype``.
+
+    NaN for floats, the maximum for unsigned integers (255 for uint8: outside every label range)
+    and the minimum for signed integers (-32768 for int16).
+    """
+    dtype = np.dtype(dtype)
+    if dtype.kind == "f":
+        return float("nan")
+    if dtype.kind == "u":
+        return int(np.iinfo(dtype).max)
+    if dtype.kind == "i":
+        return int(np.iinfo(dtype).min)
+    raise InputError(f"dtype {dtype} is not supported in a demseis store (use int, uint or float)")
+
+
+def _sample_compressor(dtype: np.dtype):
+    from zarr.codecs import BloscCodec
+
+    # lz4 decodes at several GB/s: reading stays cheap next to the PyTorch side.
+    shuffle = "shuffle" if dtype.itemsize > 1 else "bitshuffle"
+    return BloscCodec(cname="lz4", clevel=5, shuffle=shuffle)
+
+
+def _particle_group_name(run_id: int) -> str:
+    return f"particles/run_{int(run_id):05d}"
+
+
+def _root_metadata(path: Path) -> dict | None:
+    """Parsed ``zarr.json`` of ``path`` or None if there is none / it is not JSON."""
+    meta = path / "zarr.json"
+    if not meta.is_file():
+        return None
+    try:
+        return json.loads(meta.read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def _is_demseis_store(path: Path) -> bool:
+    meta = _root_metadata(path)
+    return bool(
+        meta
+        and meta.get("node_type") == "group"
+        and isinstance(meta.get("attributes", {}).get("demseis"), dict)
+    )
+
+
+def _check_store_metadata(path: Path) -> dict:
+    """Root metadata of a demseis store of this schema version, else :class:`StoreError`."""
+    if not path.exists():
+        raise StoreError(f"store {str(path)!r} does not exist")
+    if not path.is_dir():
+        raise StoreError(f"store {str(path)!r} is a file, not a Zarr store directory")
+    meta = _root_metadata(path)
+    if meta is None:
+        raise StoreError(f"{str(path)!r} is not a Zarr store (no readable zarr.json)")
+    if meta.get("zarr_format") != 3 or meta.get("node_type") != "group":
+        raise StoreError(
+            f"{str(path)!r} is not a Zarr v3 group (zarr_format={meta.get('zarr_format')!r}, "
+            f"node_type={meta.get('node_type')!r})"
+        )
+    info = meta.get("attributes", {}).get("demseis")
+    if not isinstance(info, dict) or "schema_version" not in info:
+        raise StoreError(f"{str(path)!r} is a Zarr store but was not written by demseis")
+    version = info["schema_version"]
+    if version != SCHEMA_VERSION:
+        raise StoreError(
+            f"store {str(path)!r} has schema version {version!r} but this demseis "
+            f"({__version__}) reads schema version {SCHEMA_VERSION}"
+        )
+    return meta
+
+
+# --------------------------------------------------------------------------------------------
+# layout
+
+
+@dataclass(frozen=True)
+class StoreLayout:
+    """Shape of a store, derived from its arrays.
+
+    Attributes
+    ----------
+    n_shards : number of shards (one shard = one DEM run).
+    samples_per_shard : S, samples in every shard.
+    shape : (H, W) of one sample (rows = depth, columns = x).
+    arrays : sample array name -> dtype, in store order.
+    params : parameter name -> dtype, sorted by name.
+    """
+
+    n_shards: int
+    samples_per_shard: int
+    shape: tuple[int, int]
+    arrays: dict[str, np.dtype] = field(default_factory=dict)
+    params: dict[str, np.dtype] = field(default_factory=dict)
+
+    @property
+    def n_samples(self) -> int:
+        """Total number of samples N = n_shards * samples_per_shard."""
+        return self.n_shards * self.samples_per_shard
+
+    def shard_slice(self, shard_index: int) -> slice:
+        """Sample slice ``[k*S, (k+1)*S)`` of shard ``k``."""
+        s = self.samples_per_shard
+        return slice(shard_index * s, (shard_index + 1) * s)
+
+    def describe_difference(self, other: StoreLayout) -> list[str]:
+        """Human-readable differences between two layouts (empty if equal)."""
+        diffs = []
+        for name in ("n_shards", "samples_per_shard", "shape"):
+            a, b = getattr(self, name), getattr(other, name)
+            if tuple(np.atleast_1d(a)) != tuple(np.atleast_1d(b)):
+                diffs.append(f"{name}: {a} vs {b}")
+        for name in ("arrays", "params"):
+            a = {k: str(v) for k, v in getattr(self, name).items()}
+            b = {k: str(v) for k, v in getattr(other, name).items()}
+            if a != b:
+                diffs.append(f"{name}: {a} vs {b}")
+        return diffs
+
+
+def store_layout(group) -> StoreLayout:
+    """Derive the :class:`StoreLayout` of an open demseis store group.
+
+    Raises
+    ------
+    StoreError
+        If ``shard_done`` or every sample array is missing, or arrays disagree in shape.
+    """
+    keys = set(group.array_keys())
+    if "shard_done" not in keys:
+        raise StoreError("store has no 'shard_done' array: it is incomplete or not a demseis store")
+    n_shards = int(group["shard_done"].shape[0])
+    arrays: dict[str, np.dtype] = {}
+    shape = None
+    samples_per_shard = None
+    for name in SAMPLE_ARRAYS:
+        if name not in keys:
+            continue
+        arr = group[name]
+        arrays[name] = np.dtype(arr.dtype)
+        s = int(arr.shards[0]) if arr.shards is not None else int(arr.chunks[0])
+        sh = tuple(int(v) for v in arr.shape[1:])
+        if shape is None:
+            shape, samples_per_shard = sh, s
+        if sh != shape or s != samples_per_shard or arr.shape[0] != n_shards * s:
+            raise StoreError(
+                f"array {name!r} has shape {arr.shape} and {s} samples per shard, inconsistent "
+                f"with {n_shards} shards of {samples_per_shard} samples of {shape}"
+            )
+    if not arrays:
+        raise StoreError("store has no sample arrays (seismic, fault, ...)")
+    params: dict[str, np.dtype] = {}
+    if "params" in set(group.group_keys()):
+        pgroup = group["params"]
+        for name in sorted(pgroup.array_keys()):
+            params[name] = np.dtype(pgroup[name].dtype)
+    return StoreLayout(n_shards, int(samples_per_shard), shape, arrays, params)
+
+
+# --------------------------------------------------------------------------------------------
+# open / attrs
+
+
+def open_store(path: str | Path, mode: str = "r"):
+    """Open a demseis store and check that this demseis can read it.
+
+    Parameters
+    ----------
+    path : store directory.
+    mode : ``"r"`` (read only, uses consolidated metadata when present) or ``"r+"``
+        (read/write, always reads the metadata files themselves).
+
+    Returns
+    -------
+    zarr.Group
+
+    Raises
+    ------
+    StoreError
+        The path is missing, is not a Zarr v3 group, was not written by demseis, or has
+        another schema version; the message says which.
+    """
+    import zarr
+
+    if mode not in ("r", "r+"):
+        raise InputError(f"mode must be 'r' or 'r+', got {mode!r}")
+    path = Path(path)
+    _check_store_metadata(path)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
+        try:
+            if mode == "r":
+                return zarr.open_group(path, mode="r")
+            return zarr.open_group(path, mode="r+", use_consolidated=False)
+        except Exception as exc:  # corrupt metadata inside a store demseis wrote
+            raise StoreError(f"cannot open store {str(path)!r}: {exc}") from exc
+
+
+def read_store_attrs(path: str | Path) -> dict:
+    """Root attributes of a demseis store (``demseis``, ``config``, ``grid``, ``failures`` ...).
+
+    Reads ``zarr.json`` directly, so it is cheap and always current.
+    """
+    return dict(_check_store_metadata(Path(path)).get("attributes", {}))
+
+
+def stored_config(path: str | Path) -> dict | None:
+    """The resolved config a store was created with (``attrs["config"]``), None if absent.
+
+    The generator compares it with the config of a new run before resuming into ``path``.
+    """
+    return read_store_attrs(path).get("config")
+
+
+def read_layout(path: str | Path) -> StoreLayout:
+    """The :class:`StoreLayout` of the store at ``path``."""
+    return store_layout(open_store(path, "r+"))
+
+
+# --------------------------------------------------------------------------------------------
+# creation
+
+
+def _normalise_dtypes(arrays: Mapping[str, Any] | Iterable[str] | None) -> dict[str, np.dtype]:
+    if arrays is None:
+        return {name: SAMPLE_ARRAYS[name] for name in DEFAULT_ARRAYS}
+    if isinstance(arrays, Mapping):
+        items = list(arrays.items())
+    elif isinstance(arrays, str):
+        raise InputError(f"arrays must be a dict name -> dtype or a list of names, got {arrays!r}")
+    else:
+        items = [(name, None) for name in arrays]
+    out: dict[str, np.dtype] = {}
+    for name, dtype in items:
+        if name not in SAMPLE_ARRAYS:
+            raise InputError(
+                f"unknown sample array {name!r}; allowed: {', '.join(SAMPLE_ARRAYS)}"
+            )
+        fixed = SAMPLE_ARRAYS[name]
+        if dtype is not None and np.dtype(dtype) != fixed:
+            raise InputError(f"sample array {name!r} must have dtype {fixed}, got {np.dtype(dtype)}")
+        out[name] = fixed
+    if not out:
+        raise InputError("arrays is empty: a store needs at least one sample array")
+    # store order is the canonical SAMPLE_ARRAYS order, independent of the caller's order
+    return {name: out[name] for name in SAMPLE_ARRAYS if name in out}
+
+
+def _normalise_params(params: Mapping[str, Any] | None) -> dict[str, np.dtype]:
+    out: dict[str, np.dtype] = {}
+    for name, dtype in (params or {}).items():
+        if not isinstance(name, str) or not name.isidentifier():
+            raise InputError(f"parameter name {name!r} must be an identifier")
+        try:
+            dt = np.dtype(dtype)
+        except TypeError as exc:
+            raise InputError(f"parameter {name!r}: {dtype!r} is not a NumPy dtype") from exc
+        if dt.kind not in _ALLOWED_PARAM_KINDS or dt.itemsize > 8:
+            raise InputError(
+                f"parameter {name!r} has dtype {dt}; allowed: signed/unsigned integers and floats"
+            )
+        out[name] = dt
+    return dict(sorted(out.items()))
+
+
+def create_store(
+    path: str | Path,
+    *,
+    n_shards: int,
+    samples_per_shard: int,
+    shape: Sequence[int],
+    arrays: Mapping[str, Any] | Iterable[str] | None = None,
+    params: Mapping[str, Any] | None = None,
+    attrs: Mapping[str, Any] | None = None,
+    overwrite: bool = False,
+):
+    """Create (or reopen for resume) a demseis store. Driver only.
+
+    Parameters
+    ----------
+    path : store directory.
+    n_shards : number of shards = number of DEM runs (>= 1).
+    samples_per_shard : S, samples per shard (>= 1).
+    shape : (H, W) of one sample.
+    arrays : sample arrays to create, dict name -> dtype (dtypes must match
+        :data:`SAMPLE_ARRAYS`) or a list of names; default :data:`DEFAULT_ARRAYS`.
+    params : per-sample parameters, dict name -> dtype (integer or float), e.g.
+        ``{"run_id": "int32", "snr_db": "float32"}``.
+    attrs : root attributes, JSON-serialisable; should hold ``config`` (the full resolved
+        config) and ``grid`` ({"x0_m", "top_m", "cell_m", "nz", "nx"}). ``demseis`` is added.
+    overwrite : replace an existing demseis store (or an empty directory). A non-empty
+        directory that is not a demseis store is never deleted.
+
+    Returns
+    -------
+    zarr.Group
+        The store opened read/write.
+
+    Notes
+    -----
+    If ``path`` already holds a demseis store and ``overwrite`` is False, this is a resume:
+    the store is left as it is (attrs untouched; compare :func:`stored_config` first) and
+    returned, provided its layout equals the requested one; otherwise :class:`StoreError`
+    names the difference.
+
+    Raises
+    ------
+    StoreError
+        ``path`` exists and is not a demseis store, or it is one with another layout / schema.
+    InputError
+        A bad argument.
+    """
+    import zarr
+
+    path = Path(path)
+    if int(n_shards) < 1 or int(n_shards) != n_shards:
+        raise InputError(f"n_shards must be a positive integer, got {n_shards!r}")
+    if int(samples_per_shard) < 1 or int(samples_per_shard) != samples_per_shard:
+        raise InputError(f"samples_per_shard must be a positive integer, got {samples_per_shard!r}")
+    shape_t = tuple(int(v) for v in shape)
+    if len(shape_t) != 2 or min(shape_t) < 1:
+        raise InputError(f"shape must be (H, W) with positive sizes, got {tuple(shape)!r}")
+    array_dtypes = _normalise_dtypes(arrays)
+    param_dtypes = _normalise_params(params)
+    attrs = dict(attrs or {})
+    if "demseis" in attrs:
+        raise InputError("attrs must not contain 'demseis': it is written by create_store")
+    try:
+        json.dumps(attrs)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"attrs are not JSON-serialisable: {exc}") from exc
+    wanted = StoreLayout(int(n_shards), int(samples_per_shard), shape_t, array_dtypes, param_dtypes)
+
+    if path.exists():
+        if not path.is_dir():
+            raise StoreError(f"{str(path)!r} exists and is a file, not a store directory")
+        if _is_demseis_store(path):
+            if not overwrite:
+                group = open_store(path, "r+")  # schema version check
+                have = store_layout(group)
+                diffs = have.describe_difference(wanted)
+                if diffs:
+                    raise StoreError(
+                        f"store {str(path)!r} exists with another layout ({'; '.join(diffs)}); "
+                        "use overwrite to replace it or choose another path"
+                    )
+                return group
+            shutil.rmtree(path)
+        elif any(path.iterdir()):
+            raise StoreError(
+                f"{str(path)!r} exists, is not empty and is not a demseis store; "
+                "refusing to write into or delete it"
+            )
+
+    root_attrs = {
+        "demseis": {"schema_version": SCHEMA_VERSION, "package_version": __version__},
+        **attrs,
+    }
+    group = zarr.create_group(path, zarr_format=3, attributes=root_attrs, overwrite=True)
+    h, w = shape_t
+    n = wanted.n_samples
+    s = wanted.samples_per_shard
+    for name, dtype in array_dtypes.items():
+        group.create_array(
+            name,
+            shape=(n, h, w),
+            dtype=dtype,
+            chunks=(1, h, w),
+            shards=(s, h, w),
+            fill_value=fill_value_for(dtype),
+            compressors=_sample_compressor(dtype),
+            dimension_names=("sample", "z", "x"),
+        )
+    pgroup = group.create_group("params")
+    for name, dtype in param_dtypes.items():
+        pgroup.create_array(
+            name,
+            shape=(n,),
+            dtype=dtype,
+            chunks=(s,),  # one chunk per shard: each shard task owns exactly one chunk file
+            fill_value=fill_value_for(dtype),
+            dimension_names=("sample",),
+        )
+    group.create_array(
+        "shard_done",
+        shape=(wanted.n_shards,),
+        dtype="uint8",
+        chunks=(1,),
+        fill_value=0,
+        dimension_names=("shard",),
+    )
+    group.create_group("particles")
+    return group
+
+
+# --------------------------------------------------------------------------------------------
+# shard writing
+
+
+def _as_sample_array(name: str, value: Any, dtype: np.dtype, shape: tuple[int, ...]) -> np.ndarray:
+    arr = np.asarray(value)
+    if arr.shape != shape:
+        raise InputError(f"array {name!r} has shape {arr.shape}, expected {shape}")
+    if dtype.kind == "f":
+        if arr.dtype.kind not in "fiu":
+            raise InputError(f"array {name!r} has dtype {arr.dtype}, expected a float array")
+        out = arr.astype(dtype, copy=False)
+        if not np.isfinite(out).all():
+            raise InputError(f"array {name!r} holds {int((~np.isfinite(out)).sum())} NaN/inf values")
+        return out
+    if arr.dtype.kind not in "iub":
+        raise InputError(f"label array {name!r} has dtype {arr.dtype}, expected integers")
+    lo, hi = LABEL_RANGES.get(name, (np.iinfo(dtype).min, np.iinfo(dtype).max))
+    hi = int(np.iinfo(dtype).max) if hi is None else hi
+    if arr.size and (arr.min() < lo or arr.max() > hi):
+        raise InputError(
+            f"label array {name!r} has values in [{arr.min()}, {arr.max()}], allowed [{lo}, {hi}]"
+        )
+    return arr.astype(dtype, copy=False)
+
+
+def _as_param_array(name: str, value: Any, dtype: np.dtype, n: int) -> np.ndarray:
+    arr = np.asarray(value)
+    if arr.ndim == 0:
+        arr = np.full(n, arr)
+    if arr.shape != (n,):
+        raise InputError(f"parameter {name!r} has shape {arr.shape}, expected ({n},)")
+    if arr.dtype.kind not in "iubf":
+        raise InputError(f"parameter {name!r} has dtype {arr.dtype}, expected numbers")
+    out = arr.astype(dtype)
+    if dtype.kind in "iu":
+        if arr.dtype.kind == "f" and not np.isfinite(arr).all():
+            raise InputError(f"integer parameter {name!r} holds NaN/inf")
+        if not np.array_equal(out.astype(np.float64), arr.astype(np.float64)):
+            raise InputError(f"parameter {name!r} values do not fit its dtype {dtype} exactly")
+        if (out == fill_value_for(dtype)).any():
+            raise InputError(
+                f"parameter {name!r} uses {fill_value_for(dtype)}, reserved for missing values"
+            )
+    elif np.isnan(out).any():
+        raise InputError(f"parameter {name!r} holds NaN")
+    return out
+
+
+def _write_array(arr, sel: slice, data: np.ndarray) -> None:
+    """Write ``data`` into ``arr[sel]`` (one whole shard / chunk: one atomic file)."""
+    arr[sel] = data
+
+
+def write_particles(path: str | Path, run_id: int, snapshots: Sequence[Snapshot]) -> None:
+    """Write the particle snapshots of DEM run ``run_id`` into ``particles/run_<id>``.
+
+    Replaces the group if present. Called by :func:`write_shard` (the task owning that run).
+    The per-element arrays of all snapshots are concatenated; ``offsets[k]:offsets[k+1]``
+    selects snapshot ``k``.
+    """
+    import zarr
+
+    snaps = list(snapshots)
+    if not snaps:
+        raise InputError(f"particles of run {run_id}: the list of snapshots is empty")
+    for k, sn in enumerate(snaps):
+        if not isinstance(sn, Snapshot):
+            raise InputError(f"particles[{k}] is a {type(sn).__name__}, expected a Snapshot")
+        n = sn.ids.shape[0]
+        for attr, shp in (("ids", (n,)), ("xy", (n, 2)), ("radius", (n,)), ("layer", (n,)),
+                          ("deposited", (n,))):
+            if np.shape(getattr(sn, attr)) != shp:
+                raise InputError(
+                    f"particles[{k}].{attr} has shape {np.shape(getattr(sn, attr))}, expected {shp}"
+                )
+    counts = np.array([sn.ids.shape[0] for sn in snaps], dtype=np.int64)
+    data = {
+        "ids": np.concatenate([np.asarray(sn.ids) for sn in snaps]),
+        "x": np.concatenate([np.asarray(sn.xy)[:, 0] for sn in snaps]),
+        "y": np.concatenate([np.asarray(sn.xy)[:, 1] for sn in snaps]),
+        "radius": np.concatenate([np.asarray(sn.radius) for sn in snaps]),
+        "layer": np.concatenate([np.asarray(sn.layer) for sn in snaps]),
+        "deposited": np.concatenate([np.asarray(sn.deposited) for sn in snaps]),
+        "offsets": np.concatenate([[0], np.cumsum(counts)]),
+        "index": np.array([sn.index for sn in snaps]),
+        "step": np.array([sn.step for sn in snaps]),
+        "throw_m": np.array([sn.throw_m for sn in snaps]),
+    }
+    root = zarr.open_group(Path(path), mode="r+", use_consolidated=False)
+    group = root.create_group(_particle_group_name(run_id), overwrite=True,
+                              attributes={"run_id": int(run_id), "n_snapshots": len(snaps)})
+    for name, dtype in PARTICLE_FIELDS.items():
+        values = data[name].astype(dtype, copy=False)
+        group.create_array(
+            name,
+            shape=values.shape,
+            dtype=dtype,
+            chunks=(max(1, values.shape[0]),),
+            fill_value=0,
+        )[...] = values
+
+
+def read_particles(path: str | Path, run_id: int) -> list[Snapshot]:
+    """The particle snapshots of DEM run ``run_id``, as written by :func:`write_shard`.
+
+    Returns
+    -------
+    list[Snapshot]
+        In snapshot order, with the dtypes of :class:`~demseis.dem.types.Snapshot`
+        (ids int64, xy (n, 2) float64, radius float64, layer int16, deposited bool).
+
+    Raises
+    ------
+    StoreError
+        The store is not readable, or it holds no particles for ``run_id``.
+    """
+    import zarr
+
+    path = Path(path)
+    _check_store_metadata(path)
+    name = _particle_group_name(run_id)
+    if not (path / name / "zarr.json").is_file():
+        raise StoreError(f"store {str(path)!r} holds no particle snapshots for run {run_id}")
+    try:
+        group = zarr.open_group(path / name, mode="r", use_consolidated=False)
+        d = {k: group[k][...] for k in PARTICLE_FIELDS}
+    except Exception as exc:
+        raise StoreError(f"particles of run {run_id} in {str(path)!r} are unreadable: {exc}") from exc
+    off = d["offsets"]
+    if off.shape[0] != d["index"].shape[0] + 1 or off[-1] != d["ids"].shape[0]:
+        raise StoreError(f"particles of run {run_id} in {str(path)!r} have inconsistent offsets")
+    snaps = []
+    for k in range(d["index"].shape[0]):
+        s = slice(int(off[k]), int(off[k + 1]))
+        snaps.append(
+            Snapshot(
+                index=int(d["index"][k]),
+                step=int(d["step"][k]),
+                throw_m=float(d["throw_m"][k]),
+                ids=d["ids"][s].copy(),
+                xy=np.stack([d["x"][s], d["y"][s]], axis=1),
+                radius=d["radius"][s].copy(),
+                layer=d["layer"][s].copy(),
+                deposited=d["deposited"][s].copy(),
+            )
+        )
+    return snaps
+
+
+def write_shard(
+    path: str | Path,
+    shard_index: int,
+    arrays: Mapping[str, np.ndarray],
+    params: Mapping[str, Any],
+    particles: Sequence[Snapshot] | None = None,
+    *,
+    run_id: int | None = None,
+) -> None:
+    """Write one complete shard (all samples of one DEM run). One task per shard.
+
+    Order: clear the shard's done flag, write every sample array (one shard file each), the
+    parameter chunks, the particle snapshots, and set the done flag last. A kill at any point
+    leaves the shard not-done; calling again rewrites it (idempotent).
+
+    Parameters
+    ----------
+    path : store directory (created by :func:`create_store`).
+    shard_index : k in ``[0, n_shards)``; the shard holds samples ``[k*S, (k+1)*S)``.
+    arrays : every sample array of the store, name -> (S, H, W) array. Float arrays must be
+        finite; label arrays integers within :data:`LABEL_RANGES`.
+    params : every parameter of the store, name -> (S,) array (or a scalar, broadcast).
+        Integer values must fit the dtype exactly; float values must not be NaN (inf is
+        allowed, e.g. ``snr_db = inf`` for noise-free samples).
+    particles : the DEM run's snapshots (stored for re-rendering), or None.
+    run_id : the DEM run id, used to name the particles group. Default: ``params["run_id"]``
+        when that parameter exists (it must then be constant in the shard), else
+        ``shard_index``.
+
+    Raises
+    ------
+    InputError
+        Missing/extra arrays or parameters, wrong shapes, NaN, labels out of range.
+    StoreError
+        The store is not a demseis store of this schema version.
+    """
+    group = open_store(path, "r+")
+    layout = store_layout(group)
+    k = int(shard_index)
+    if k != shard_index or not 0 <= k < layout.n_shards:
+        raise InputError(f"shard_index must be in [0, {layout.n_shards}), got {shard_index!r}")
+    s = layout.samples_per_shard
+    shape = (s, *layout.shape)
+    if set(arrays) != set(layout.arrays):
+        raise InputError(
+            f"arrays must be exactly {sorted(layout.arrays)} (the store's sample arrays), "
+            f"got {sorted(arrays)}"
+        )
+    if set(params) != set(layout.params):
+        raise InputError(
+            f"params must be exactly {sorted(layout.params)} (the store's parameters), "
+            f"got {sorted(params)}"
+        )
+    data = {n: _as_sample_array(n, arrays[n], dt, shape) for n, dt in layout.arrays.items()}
+    pdata = {n: _as_param_array(n, params[n], dt, s) for n, dt in layout.params.items()}
+    if "run_id" in pdata:
+        ids = np.unique(pdata["run_id"])
+        if ids.shape[0] != 1:
+            raise InputError(f"params['run_id'] must be constant in a shard, got {ids.tolist()}")
+        if run_id is not None and int(run_id) != int(ids[0]):
+            raise InputError(f"run_id={run_id} disagrees with params['run_id']={int(ids[0])}")
+        run_id = int(ids[0])
+    if run_id is None:
+        run_id = k
+
+    done = group["shard_done"]
+    if done[k] != 0:
+        done[k] = 0  # a rewrite must not leave a done flag over half-new data
+    sel = layout.shard_slice(k)
+    for name in layout.arrays:
+        _write_array(group[name], sel, data[name])
+    for name in layout.params:
+        _write_array(group["params"][name], sel, pdata[name])
+    if particles is not None:
+        write_particles(path, run_id, particles)
+    done[k] = 1
+
+
+# --------------------------------------------------------------------------------------------
+# status, failures, finalisation
+
+
+def shard_status(path: str | Path) -> np.ndarray:
+    """Done flags of every shard: (n_shards,) uint8, 0 = pending (or failed), 1 = done."""
+    group = open_store(path, "r+")
+    return np.asarray(group["shard_done"][...], dtype=np.uint8)
+
+
+def record_failures(path: str | Path, failures: Mapping[int, str]) -> dict[str, str]:
+    """Record failed shards' error text in the root attr ``failures``. Driver only.
+
+    Entries of earlier runs whose shard is now done are dropped; new entries replace old ones
+    of the same shard. Call before :func:`finalize_store`.
+
+    Parameters
+    ----------
+    failures : shard index -> error text.
+
+    Returns
+    -------
+    dict
+        The ``failures`` attr as stored (shard index as string -> text, sorted by index).
+    """
+    group = open_store(path, "r+")
+    n_shards = int(group["shard_done"].shape[0])
+    done = np.asarray(group["shard_done"][...])
+    merged = {int(k): str(v) for k, v in dict(group.attrs.get("failures", {})).items()}
+    for k, text in failures.items():
+        if not 0 <= int(k) < n_shards:
+            raise InputError(f"failed shard index {k!r} is outside [0, {n_shards})")
+        merged[int(k)] = str(text)
+    out = {str(k): merged[k] for k in sorted(merged) if not done[k]}
+    group.attrs["failures"] = out
+    return out
+
+
+def finalize_store(path: str | Path) -> None:
+    """Write consolidated metadata (once, at the end of a sweep). Driver only.
+
+    Any later metadata write (resume, :func:`record_failures`) drops the consolidated copy;
+    calling this again restores it.
+    """
+    import zarr
+
+    open_store(path, "r+")
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
+        zarr.consolidate_metadata(str(Path(path)))

@@ -1,0 +1,212 @@
+"""Integrity checks of a demseis store (``demseis validate PATH``).
+
+Only shards whose done flag is set are checked: pending shards are work still to do, not
+problems. A done shard must be complete (every chunk present), finite, hold labels within range
+and consistent parameters, and its DEM run's particle snapshots (when stored) must be readable.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from demseis.datasets.store import (
+    LABEL_RANGES,
+    SCHEMA_VERSION,
+    fill_value_for,
+    open_store,
+    read_particles,
+    store_layout,
+)
+from demseis.errors import StoreError
+
+_GRID_KEYS = ("x0_m", "top_m", "cell_m", "nz", "nx")
+
+
+@dataclass
+class ValidationReport:
+    """Outcome of :func:`validate_store`.
+
+    Attributes
+    ----------
+    path : the store checked.
+    problems : one human-readable line per problem (empty when the store is fine).
+    n_shards, n_done : shards in the store and shards marked done.
+    n_samples_checked : samples of done shards that were read and checked.
+    failures : the driver's ``failures`` attr (shard index -> error text).
+    """
+
+    path: str
+    problems: list[str] = field(default_factory=list)
+    n_shards: int = 0
+    n_done: int = 0
+    n_samples_checked: int = 0
+    failures: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        """True when no problem was found."""
+        return not self.problems
+
+    def summary(self) -> str:
+        """One line: shards done / pending / failed, samples checked, problems."""
+        pending = self.n_shards - self.n_done
+        text = (
+            f"{self.path}: {self.n_done}/{self.n_shards} shards done, {pending} pending"
+            f" ({len(self.failures)} recorded failures), {self.n_samples_checked} samples checked"
+        )
+        return text + (", ok" if self.ok else f", {len(self.problems)} problems")
+
+
+def _check_array(name: str, values: np.ndarray, shard: int, s0: int) -> list[str]:
+    """Problems of one done shard's slice of sample array ``name``."""
+    out = []
+    if values.dtype.kind == "f":
+        bad = ~np.isfinite(values)
+        if bad.any():
+            samples = np.unique(np.nonzero(bad)[0]) + s0
+            out.append(
+                f"shard {shard}: {name} has {int(bad.sum())} NaN/inf values (missing or corrupt "
+                f"data) in samples {_fmt(samples)}"
+            )
+        return out
+    fill = fill_value_for(values.dtype)
+    missing = (values == fill).all(axis=(1, 2))
+    if missing.any():
+        out.append(f"shard {shard}: {name} samples {_fmt(np.nonzero(missing)[0] + s0)} were never written")
+    lo, hi = LABEL_RANGES.get(name, (None, None))
+    if lo is not None:
+        hi_v = np.iinfo(values.dtype).max if hi is None else hi
+        bad = (values < lo) | (values > hi_v)
+        bad[missing] = False
+        if bad.any():
+            samples = np.unique(np.nonzero(bad)[0]) + s0
+            vals = np.unique(values[bad])
+            out.append(
+                f"shard {shard}: {name} has values {_fmt(vals)} outside [{lo}, {hi_v}] in samples "
+                f"{_fmt(samples)}"
+            )
+    return out
+
+
+def _fmt(values: np.ndarray, limit: int = 8) -> str:
+    vals = [str(v) for v in np.asarray(values).tolist()[:limit]]
+    more = len(values) - limit
+    return ", ".join(vals) + (f" ... (+{more})" if more > 0 else "")
+
+
+def validate_store(path: str | Path, *, check_particles: bool = True) -> ValidationReport:
+    """Check a demseis store; return every problem found.
+
+    Checks
+    ------
+    - root attrs: ``demseis`` (schema and package version), ``config``, ``grid`` (with keys
+      x0_m, top_m, cell_m, nz, nx matching the sample shape);
+    - every done shard: each sample array readable, no NaN/inf in float arrays, no never-written
+      chunk, labels within :data:`LABEL_RANGES`; each parameter readable, no NaN (``inf`` only in
+      parameters named ``*snr_db``), no missing integers; ``run_id`` (if stored) constant in
+      the shard and different from every other shard's; ``snapshot`` (if stored) non-negative
+      and, with particles stored, less than the run's number of snapshots;
+    - the particles of each done shard's run, where stored: readable, consistent offsets.
+
+    Raises
+    ------
+    StoreError
+        The path is missing, foreign or of another schema version (the CLI exits 2).
+    """
+    group = open_store(path, "r+")
+    attrs = dict(group.attrs)
+    layout = store_layout(group)
+    report = ValidationReport(path=str(path), n_shards=layout.n_shards)
+    problems = report.problems
+    report.failures = {str(k): str(v) for k, v in dict(attrs.get("failures", {})).items()}
+
+    info = attrs.get("demseis", {})
+    if info.get("schema_version") != SCHEMA_VERSION or "package_version" not in info:
+        problems.append(f"root attr 'demseis' is incomplete: {info!r}")
+    if not isinstance(attrs.get("config"), dict):
+        problems.append("root attr 'config' (the resolved config) is missing")
+    grid = attrs.get("grid")
+    if not isinstance(grid, dict):
+        problems.append("root attr 'grid' is missing")
+    else:
+        missing = [k for k in _GRID_KEYS if k not in grid]
+        if missing:
+            problems.append(f"root attr 'grid' lacks {missing}")
+        elif (grid["nz"], grid["nx"]) != layout.shape:
+            problems.append(
+                f"grid nz, nx = ({grid['nz']}, {grid['nx']}) but samples are {layout.shape}"
+            )
+
+    try:
+        done = np.asarray(group["shard_done"][...])
+    except Exception as exc:  # noqa: BLE001 - report, don't crash
+        problems.append(f"shard_done is unreadable: {exc}")
+        return report
+    bad_flags = np.nonzero(done > 1)[0]
+    if bad_flags.size:
+        problems.append(f"shard_done holds values other than 0/1 at shards {_fmt(bad_flags)}")
+    done_shards = np.nonzero(done == 1)[0]
+    report.n_done = int(done_shards.size)
+    for key in report.failures:
+        if key.isdigit() and int(key) < layout.n_shards and done[int(key)] == 1:
+            problems.append(f"shard {key} is done but still listed under 'failures'")
+
+    s = layout.samples_per_shard
+    pgroup = group["params"] if layout.params else None
+    run_of_shard: dict[int, int] = {}
+    for k in done_shards.tolist():
+        sel = layout.shard_slice(k)
+        for name in layout.arrays:
+            try:
+                values = group[name][sel]
+            except Exception as exc:  # noqa: BLE001
+                problems.append(f"shard {k}: {name} is unreadable: {exc}")
+                continue
+            problems.extend(_check_array(name, values, k, sel.start))
+        pvals: dict[str, np.ndarray] = {}
+        for name, dtype in layout.params.items():
+            try:
+                v = pgroup[name][sel]
+            except Exception as exc:  # noqa: BLE001
+                problems.append(f"shard {k}: parameter {name} is unreadable: {exc}")
+                continue
+            pvals[name] = v
+            if dtype.kind == "f":
+                if np.isnan(v).any():
+                    problems.append(f"shard {k}: parameter {name} has NaN (missing) values")
+                inf_ok = name.endswith("snr_db")
+                if np.isinf(v).any() and not (inf_ok and (v[np.isinf(v)] > 0).all()):
+                    problems.append(f"shard {k}: parameter {name} has infinite values")
+            elif (v == fill_value_for(dtype)).any():
+                problems.append(f"shard {k}: parameter {name} has missing values")
+        if "run_id" in pvals:
+            ids = np.unique(pvals["run_id"])
+            if ids.size != 1:
+                problems.append(f"shard {k}: run_id is not constant ({_fmt(ids)})")
+            else:
+                run_of_shard[k] = int(ids[0])
+        run_id = run_of_shard.get(k, k)
+        if "snapshot" in pvals and (pvals["snapshot"] < 0).any():
+            problems.append(f"shard {k}: parameter snapshot has negative values")
+        if check_particles and (Path(path) / f"particles/run_{run_id:05d}" / "zarr.json").is_file():
+            try:
+                snaps = read_particles(path, run_id)
+            except StoreError as exc:
+                problems.append(f"shard {k}: {exc}")
+            else:
+                if "snapshot" in pvals and (pvals["snapshot"] >= len(snaps)).any():
+                    problems.append(
+                        f"shard {k}: parameter snapshot reaches {int(pvals['snapshot'].max())} but "
+                        f"run {run_id} stores {len(snaps)} particle snapshots"
+                    )
+        report.n_samples_checked += s
+
+    seen: dict[int, int] = {}
+    for k, rid in run_of_shard.items():
+        if rid in seen:
+            problems.append(f"shards {seen[rid]} and {k} share run_id {rid} (one shard = one run)")
+        seen.setdefault(rid, k)
+    return report

@@ -1,0 +1,412 @@
+"""Numba kernels of the 2D DEM (hot loops only; validation lives in the Python wrappers).
+
+Conventions shared by every kernel
+----------------------------------
+- ``pos``, ``vel``, ``force``: (n, 2) float64, metres, m/s, newtons (per metre of thickness).
+- ``radius``: (n,) float64 metres; ``inv_mass``: (n,) float64 1/kg (0 freezes an element);
+  ``mass``: (n,) float64 kg; ``eta``: (n,) float64 viscous damping coefficient N s/m.
+- Neighbour (Verlet) list in ELL layout: ``nbr`` (n, K) int32 holds, in row ``i``, the partners
+  ``j > i`` with ``|x_j - x_i| < r_i + r_j + skin`` at the last rebuild; ``n_nbr`` (n,) int32 the
+  row lengths. Pair history lives beside it: ``shear`` (n, K) float64 accumulated tangential
+  displacement X_s (m) and ``bond`` (n, K) uint8 (1 = intact bond).
+- Walls are straight segments ``walls`` (nw, 4) float64 ``[x0, y0, x1, y1]`` moving with
+  ``wall_vel`` (nw, 2) m/s; ``wall_shear`` (n, nw) float64 is the element-wall X_s history.
+
+Force law (the paper's Eq. 1-4 with the slider correction of DESIGN.md)
+-------------------------------------------------------------------------
+With d the centre distance, R = r_i + r_j and n the unit vector from i to j:
+
+- bonded pair: F_n = Kn (R - d) (repulsive > 0, attractive < 0) until d - R > r0 R, then the
+  bond breaks for ever;
+- unbonded pair: F_n = Kn (R - d) if d < R, else 0 and the history is reset;
+- tangential: X_s += (v_j - v_i) . t dt,  F_s = -Ks X_s,  |F_s| <= C0 + mu max(F_n, 0)
+  (Mohr-Coulomb slider: on slip, X_s is reset onto the cap).
+
+Force on j: F_n n + F_s t; on i the opposite. Each element also feels -eta v and -m g y-hat.
+Integration: velocity Verlet (kick-drift-kick), damping evaluated with the half-step velocity.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+STATUS_OK = 0
+STATUS_NAN = 1
+STATUS_KE = 2
+STATUS_BOX = 3
+STATUS_NBR_OVERFLOW = 4
+
+
+@njit(cache=True)
+def build_neighbours(pos, radius, skin, nbr, n_nbr, shear, bond, new_nbr, new_n, new_shear,
+                     new_bond, cell_head, cell_next):
+    """Rebuild the half Verlet list with a cell grid, carrying pair history over.
+
+    Parameters
+    ----------
+    pos : (n, 2) float64 centres (m).
+    radius : (n,) float64 radii (m).
+    skin : float Verlet skin (m); pairs with d < r_i + r_j + skin are listed.
+    nbr, n_nbr, shear, bond : the current list and its history (see module docstring).
+    new_nbr, new_n, new_shear, new_bond : scratch arrays of the same shapes, overwritten.
+    cell_head : (m,) int64 scratch, m >= number of cells; cell_next : (n,) int64 scratch.
+
+    Returns
+    -------
+    int
+        0 on success, 1 if a row would exceed the capacity K (nothing is then changed).
+    Pair history (X_s, bond) of pairs that stay listed is copied; new pairs start at 0 and
+    unbonded. The results are copied back into ``nbr``/``n_nbr``/``shear``/``bond``.
+    """
+    n = pos.shape[0]
+    cap = nbr.shape[1]
+    if n == 0:
+        return 0
+    rmax = 0.0
+    xmin = pos[0, 0]
+    xmax = pos[0, 0]
+    ymin = pos[0, 1]
+    ymax = pos[0, 1]
+    for i in range(n):
+        if radius[i] > rmax:
+            rmax = radius[i]
+        xmin = min(xmin, pos[i, 0])
+        xmax = max(xmax, pos[i, 0])
+        ymin = min(ymin, pos[i, 1])
+        ymax = max(ymax, pos[i, 1])
+    cs = 2.0 * rmax + skin
+    ncx = int((xmax - xmin) / cs) + 1
+    ncy = int((ymax - ymin) / cs) + 1
+    # bound the grid size by the scratch (degenerate spreads would only slow, not break)
+    while ncx * ncy > cell_head.shape[0]:
+        cs *= 1.5
+        ncx = int((xmax - xmin) / cs) + 1
+        ncy = int((ymax - ymin) / cs) + 1
+    for c in range(ncx * ncy):
+        cell_head[c] = -1
+    for i in range(n):
+        cx = int((pos[i, 0] - xmin) / cs)
+        cy = int((pos[i, 1] - ymin) / cs)
+        c = cy * ncx + cx
+        cell_next[i] = cell_head[c]
+        cell_head[c] = i
+    for i in range(n):
+        new_n[i] = 0
+    for i in range(n):
+        xi = pos[i, 0]
+        yi = pos[i, 1]
+        ri = radius[i]
+        cx = int((xi - xmin) / cs)
+        cy = int((yi - ymin) / cs)
+        for ddy in range(-1, 2):
+            yy = cy + ddy
+            if yy < 0 or yy >= ncy:
+                continue
+            for ddx in range(-1, 2):
+                xx = cx + ddx
+                if xx < 0 or xx >= ncx:
+                    continue
+                j = cell_head[yy * ncx + xx]
+                while j >= 0:
+                    if j > i:
+                        dx = pos[j, 0] - xi
+                        dy = pos[j, 1] - yi
+                        cut = ri + radius[j] + skin
+                        if dx * dx + dy * dy < cut * cut:
+                            k = new_n[i]
+                            if k >= cap:
+                                return 1
+                            new_nbr[i, k] = j
+                            new_shear[i, k] = 0.0
+                            new_bond[i, k] = 0
+                            for q in range(n_nbr[i]):
+                                if nbr[i, q] == j:
+                                    new_shear[i, k] = shear[i, q]
+                                    new_bond[i, k] = bond[i, q]
+                                    break
+                            new_n[i] = k + 1
+                    j = cell_next[j]
+    for i in range(n):
+        m = new_n[i]
+        n_nbr[i] = m
+        for k in range(m):
+            nbr[i, k] = new_nbr[i, k]
+            shear[i, k] = new_shear[i, k]
+            bond[i, k] = new_bond[i, k]
+    return 0
+
+
+@njit(cache=True)
+def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, kn, ks, mu, c0, r0, dt, force):
+    """Add the pair (normal + tangential) forces to ``force`` and update the pair history.
+
+    Parameters
+    ----------
+    pos, vel : (n, 2) float64 positions (m) and velocities (m/s).
+    radius : (n,) float64 radii (m).
+    nbr, n_nbr, shear, bond : Verlet list and history, updated in place (X_s, broken bonds).
+    kn, ks : float normal and shear stiffness (N/m per metre of thickness).
+    mu, c0, r0 : float friction coefficient, cohesion (N), bond-breaking strain.
+    dt : float time step (s), for the X_s increment.
+    force : (n, 2) float64, accumulated into (N).
+
+    Returns
+    -------
+    int number of bonds broken during this call.
+    """
+    n = pos.shape[0]
+    nbroken = 0
+    for i in range(n):
+        xi = pos[i, 0]
+        yi = pos[i, 1]
+        ri = radius[i]
+        fxi = 0.0
+        fyi = 0.0
+        for k in range(n_nbr[i]):
+            j = nbr[i, k]
+            dx = pos[j, 0] - xi
+            dy = pos[j, 1] - yi
+            rr = ri + radius[j]
+            d2 = dx * dx + dy * dy
+            bonded = bond[i, k] != 0
+            if bonded:
+                d = np.sqrt(d2)
+                if d - rr > r0 * rr:
+                    bond[i, k] = 0
+                    nbroken += 1
+                    bonded = False
+                    if d >= rr:
+                        shear[i, k] = 0.0
+                        continue
+            else:
+                if d2 >= rr * rr:
+                    shear[i, k] = 0.0
+                    continue
+                d = np.sqrt(d2)
+            inv_d = 1.0 / d
+            nx = dx * inv_d
+            ny = dy * inv_d
+            fn = kn * (rr - d)
+            # tangent t = (-ny, nx); relative velocity of j w.r.t. i
+            vt = (vel[j, 0] - vel[i, 0]) * (-ny) + (vel[j, 1] - vel[i, 1]) * nx
+            xs = shear[i, k] + vt * dt
+            fs = -ks * xs
+            cap = c0
+            if fn > 0.0:
+                cap += mu * fn
+            if fs > cap:
+                fs = cap
+                xs = -cap / ks
+            elif fs < -cap:
+                fs = -cap
+                xs = cap / ks
+            shear[i, k] = xs
+            fx = fn * nx - fs * ny
+            fy = fn * ny + fs * nx
+            force[j, 0] += fx
+            force[j, 1] += fy
+            fxi -= fx
+            fyi -= fy
+        force[i, 0] += fxi
+        force[i, 1] += fyi
+    return nbroken
+
+
+@njit(cache=True)
+def wall_forces(pos, vel, radius, walls, wall_vel, wall_shear, kn, ks, mu, dt, force):
+    """Add disk-segment wall forces (normal spring + frictional slider, no cohesion).
+
+    Parameters
+    ----------
+    pos, vel : (n, 2) float64; radius : (n,) float64.
+    walls : (nw, 4) float64 segments [x0, y0, x1, y1] (m); wall_vel : (nw, 2) float64 (m/s).
+    wall_shear : (n, nw) float64 element-wall X_s history (m), updated in place.
+    kn, ks, mu, dt : stiffnesses (N/m), friction coefficient, time step (s).
+    force : (n, 2) float64, accumulated into (N).
+
+    Notes
+    -----
+    The contact point is the closest point of the segment to the centre, so segment ends act as
+    rounded corners. Overlap = r - distance; the normal points from the wall to the element.
+    """
+    n = pos.shape[0]
+    nw = walls.shape[0]
+    for w in range(nw):
+        ax = walls[w, 0]
+        ay = walls[w, 1]
+        ex = walls[w, 2] - ax
+        ey = walls[w, 3] - ay
+        l2 = ex * ex + ey * ey
+        for i in range(n):
+            px = pos[i, 0] - ax
+            py = pos[i, 1] - ay
+            s = (px * ex + py * ey) / l2
+            if s < 0.0:
+                s = 0.0
+            elif s > 1.0:
+                s = 1.0
+            dx = px - s * ex
+            dy = py - s * ey
+            d2 = dx * dx + dy * dy
+            ri = radius[i]
+            if d2 >= ri * ri or d2 == 0.0:
+                wall_shear[i, w] = 0.0
+                continue
+            d = np.sqrt(d2)
+            nx = dx / d
+            ny = dy / d
+            fn = kn * (ri - d)
+            vt = (vel[i, 0] - wall_vel[w, 0]) * (-ny) + (vel[i, 1] - wall_vel[w, 1]) * nx
+            xs = wall_shear[i, w] + vt * dt
+            fs = -ks * xs
+            cap = mu * fn
+            if fs > cap:
+                fs = cap
+                xs = -cap / ks
+            elif fs < -cap:
+                fs = -cap
+                xs = cap / ks
+            wall_shear[i, w] = xs
+            force[i, 0] += fn * nx - fs * ny
+            force[i, 1] += fn * ny + fs * nx
+
+
+@njit(cache=True)
+def body_forces(vel, mass, eta, gravity, force):
+    """Set ``force`` to gravity plus global viscous damping: F = -eta v - m g y-hat.
+
+    vel : (n, 2) float64 m/s; mass, eta : (n,) float64 kg, N s/m; gravity : float m/s^2;
+    force : (n, 2) float64 overwritten (N).
+    """
+    for i in range(vel.shape[0]):
+        force[i, 0] = -eta[i] * vel[i, 0]
+        force[i, 1] = -eta[i] * vel[i, 1] - mass[i] * gravity
+
+
+@njit(cache=True)
+def run_steps(n_steps, dt, pos, vel, force, radius, mass, inv_mass, eta, gravity,
+              kn, ks, mu, c0, r0, wall_kn, wall_mu,
+              nbr, n_nbr, shear, bond, pos_ref, skin,
+              new_nbr, new_n, new_shear, new_bond, cell_head, cell_next,
+              walls, wall_vel, wall_shear, box, vmax_limit, check_every):
+    """Advance the assembly ``n_steps`` velocity-Verlet steps.
+
+    Parameters
+    ----------
+    n_steps : int; dt : float time step (s).
+    pos, vel, force : (n, 2) float64 state, updated in place. ``force`` must hold the forces
+        of the current positions on entry (call :func:`compute_forces` once first).
+    radius, mass, inv_mass, eta : (n,) float64.
+    gravity, kn, ks, mu, c0, r0 : float material constants (SI).
+    wall_kn, wall_mu : float wall stiffness (N/m) and friction coefficient.
+    nbr ... cell_next : Verlet list, its history, its rebuild scratch (see build_neighbours).
+    pos_ref : (n, 2) float64 positions at the last rebuild; skin : float (m). The list is
+        rebuilt when an element has moved more than skin/2 since then.
+    walls, wall_vel, wall_shear : moving segment walls (walls are advanced by wall_vel dt).
+    box : (4,) float64 [xmin, xmax, ymin, ymax]; an element centre outside stops the run.
+    vmax_limit : float (m/s); a speed above it is reported as a kinetic-energy blow-up.
+    check_every : int steps between the NaN / speed / box checks.
+
+    Returns
+    -------
+    status : int  (STATUS_OK, STATUS_NAN, STATUS_KE, STATUS_BOX, STATUS_NBR_OVERFLOW)
+    steps_done : int
+    bad : int  index of the offending element (-1 if none)
+    n_rebuilds : int
+    n_broken : int  bonds broken
+    """
+    n = pos.shape[0]
+    nw = walls.shape[0]
+    half = 0.5 * dt
+    lim2 = 0.25 * skin * skin
+    n_rebuilds = 0
+    n_broken = 0
+    for step in range(n_steps):
+        maxd2 = 0.0
+        for i in range(n):
+            vel[i, 0] += half * force[i, 0] * inv_mass[i]
+            vel[i, 1] += half * force[i, 1] * inv_mass[i]
+            pos[i, 0] += dt * vel[i, 0]
+            pos[i, 1] += dt * vel[i, 1]
+            ddx = pos[i, 0] - pos_ref[i, 0]
+            ddy = pos[i, 1] - pos_ref[i, 1]
+            dd = ddx * ddx + ddy * ddy
+            if dd > maxd2:
+                maxd2 = dd
+        for w in range(nw):
+            walls[w, 0] += dt * wall_vel[w, 0]
+            walls[w, 1] += dt * wall_vel[w, 1]
+            walls[w, 2] += dt * wall_vel[w, 0]
+            walls[w, 3] += dt * wall_vel[w, 1]
+        if maxd2 > lim2:
+            if not (maxd2 < 1e300):
+                return STATUS_NAN, step, _first_bad(pos, vel), n_rebuilds, n_broken
+            st = build_neighbours(pos, radius, skin, nbr, n_nbr, shear, bond, new_nbr, new_n,
+                                  new_shear, new_bond, cell_head, cell_next)
+            if st != 0:
+                return STATUS_NBR_OVERFLOW, step, -1, n_rebuilds, n_broken
+            for i in range(n):
+                pos_ref[i, 0] = pos[i, 0]
+                pos_ref[i, 1] = pos[i, 1]
+            n_rebuilds += 1
+        body_forces(vel, mass, eta, gravity, force)
+        n_broken += pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, kn, ks, mu, c0, r0,
+                                dt, force)
+        if nw > 0:
+            wall_forces(pos, vel, radius, walls, wall_vel, wall_shear, wall_kn, ks, wall_mu,
+                        dt, force)
+        for i in range(n):
+            vel[i, 0] += half * force[i, 0] * inv_mass[i]
+            vel[i, 1] += half * force[i, 1] * inv_mass[i]
+        if (step + 1) % check_every == 0 or step == n_steps - 1:
+            st, bad = check_state(pos, vel, box, vmax_limit)
+            if st != STATUS_OK:
+                return st, step + 1, bad, n_rebuilds, n_broken
+    return STATUS_OK, n_steps, -1, n_rebuilds, n_broken
+
+
+@njit(cache=True)
+def _first_bad(pos, vel):
+    for i in range(pos.shape[0]):
+        s = pos[i, 0] + pos[i, 1] + vel[i, 0] + vel[i, 1]
+        if not (abs(s) < 1e300):
+            return i
+    return -1
+
+
+@njit(cache=True)
+def check_state(pos, vel, box, vmax_limit):
+    """Stability check: NaN/inf, speed above ``vmax_limit`` (m/s), centre outside ``box``.
+
+    Returns (status, index of the first offending element or -1).
+    """
+    v2lim = vmax_limit * vmax_limit
+    for i in range(pos.shape[0]):
+        x = pos[i, 0]
+        y = pos[i, 1]
+        v2 = vel[i, 0] * vel[i, 0] + vel[i, 1] * vel[i, 1]
+        if not (abs(x) + abs(y) + v2 < 1e300):
+            return STATUS_NAN, i
+        if v2 > v2lim:
+            return STATUS_KE, i
+        if x < box[0] or x > box[1] or y < box[2] or y > box[3]:
+            return STATUS_BOX, i
+    return STATUS_OK, -1
+
+
+@njit(cache=True)
+def coordination(pos, radius, nbr, n_nbr, tol):
+    """Per-element contact count: pairs with d < r_i + r_j + tol (m). Returns (n,) int64."""
+    n = pos.shape[0]
+    z = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        for k in range(n_nbr[i]):
+            j = nbr[i, k]
+            dx = pos[j, 0] - pos[i, 0]
+            dy = pos[j, 1] - pos[i, 1]
+            rr = radius[i] + radius[j] + tol
+            if dx * dx + dy * dy < rr * rr:
+                z[i] += 1
+                z[j] += 1
+    return z

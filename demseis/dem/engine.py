@@ -1,0 +1,319 @@
+"""The DEM state and its stepping loop (a thin Python shell around :mod:`demseis.dem._kernels`).
+
+:class:`Engine` owns the arrays of one assembly (positions, velocities, forces, the Verlet list
+with its pair history, walls), advances them with :func:`demseis.dem._kernels.run_steps`, grows
+the neighbour-list capacity when needed, and turns an unstable state into a
+:class:`demseis.errors.SimulationError` that names the cause.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from demseis.dem import _kernels as K
+from demseis.dem.types import Material
+from demseis.errors import InputError, SimulationError
+
+
+def time_step(radius_min_m: float, density_kg_m3: float, kn_n_m: float) -> float:
+    """Stable time step of the paper's Eq. 5: dt = 0.25 sqrt(m_min / Kn).
+
+    Parameters
+    ----------
+    radius_min_m : smallest element radius (m); m_min = rho pi r_min^2 (unit thickness).
+    density_kg_m3 : element density (kg/m^3).
+    kn_n_m : normal stiffness (N/m).
+
+    Returns
+    -------
+    float
+        Time step in seconds.
+    """
+    m_min = density_kg_m3 * math.pi * radius_min_m**2
+    return 0.25 * math.sqrt(m_min / kn_n_m)
+
+
+def validate_material(material: Material) -> None:
+    """Raise :class:`InputError` naming the first out-of-range field of ``material``."""
+    checks = [
+        ("density_kg_m3", material.density_kg_m3 > 0, "> 0"),
+        ("kn_n_m", material.kn_n_m > 0, "> 0"),
+        ("ks_ratio", 0 < material.ks_ratio <= 10, "in (0, 10]"),
+        ("friction", 0 <= material.friction <= 10, "in [0, 10]"),
+        ("cohesion_n", material.cohesion_n >= 0, ">= 0"),
+        ("bond_strain", 0 < material.bond_strain < 1, "in (0, 1)"),
+        ("damping_scale", material.damping_scale >= 0, ">= 0"),
+        ("gravity_m_s2", material.gravity_m_s2 >= 0, ">= 0"),
+    ]
+    for name, ok, allowed in checks:
+        if not (ok and math.isfinite(getattr(material, name))):
+            raise InputError(f"Material.{name}={getattr(material, name)!r} is out of range "
+                             f"(allowed {allowed})")
+    if material.model not in ("frictional", "bonded"):
+        raise InputError(f"Material.model={material.model!r}; allowed 'frictional' or 'bonded'")
+
+
+class Engine:
+    """Mutable DEM state: elements, pair history, walls; advanced by :meth:`run`.
+
+    Parameters
+    ----------
+    pos : (n, 2) float64 centres (m), copied.
+    radius : (n,) float64 radii (m), copied.
+    material : Material
+    dt_s : time step (s); default from Eq. 5 with the smallest radius present.
+    eta : damping coefficient per element (N s/m), scalar or (n,); default
+        ``dt * material.damping_scale`` (the paper's global damping).
+    friction, cohesion_n : override the material's contact friction / cohesion (e.g. a
+        frictionless settling stage).
+    wall_friction : wall friction coefficient (default: the contact friction).
+    skin_m : Verlet skin (m); default 0.3 * r_min, and at least enough for intact bonds.
+    """
+
+    def __init__(self, pos: np.ndarray, radius: np.ndarray, material: Material, *,
+                 dt_s: float | None = None, eta: float | np.ndarray | None = None,
+                 friction: float | None = None, cohesion_n: float | None = None,
+                 wall_friction: float | None = None, skin_m: float | None = None,
+                 capacity: int = 12) -> None:
+        validate_material(material)
+        self.material = material
+        self.pos = np.ascontiguousarray(pos, dtype=np.float64).copy()
+        self.radius = np.ascontiguousarray(radius, dtype=np.float64).copy()
+        n = self.radius.shape[0]
+        if self.pos.shape != (n, 2):
+            raise InputError(f"pos has shape {self.pos.shape}; expected ({n}, 2)")
+        if n and not (np.all(np.isfinite(self.pos)) and np.all(self.radius > 0)):
+            raise InputError("positions must be finite and radii > 0")
+        rmin = float(self.radius.min()) if n else 1.0
+        self.dt = float(dt_s) if dt_s is not None else time_step(
+            rmin, material.density_kg_m3, material.kn_n_m)
+        self.mass = material.density_kg_m3 * math.pi * self.radius**2
+        self.inv_mass = 1.0 / self.mass
+        self._eta_default = eta
+        self.eta = self._make_eta(eta, n)
+        self.vel = np.zeros((n, 2))
+        self.force = np.zeros((n, 2))
+        self.kn = float(material.kn_n_m)
+        self.ks = float(material.ks_ratio * material.kn_n_m)
+        self.mu = float(material.friction if friction is None else friction)
+        self.c0 = float(material.cohesion_n if cohesion_n is None else cohesion_n)
+        self.r0 = float(material.bond_strain)
+        self.wall_mu = float(self.mu if wall_friction is None else wall_friction)
+        rmax = float(self.radius.max()) if n else 1.0
+        self.skin = float(skin_m) if skin_m is not None else max(
+            0.3 * rmin, 1.2 * material.bond_strain * 2 * rmax)
+        self.capacity = int(capacity)
+        self._alloc_lists(n)
+        self.walls = np.zeros((0, 4))
+        self.wall_vel = np.zeros((0, 2))
+        self.wall_shear = np.zeros((n, 0))
+        self.box = np.array([-np.inf, np.inf, -np.inf, np.inf])
+        self.vmax_limit = 500.0
+        self.check_every = 50
+        self.steps = 0
+        self.n_rebuilds = 0
+        self.n_broken = 0
+        self._forces_valid = False
+
+    # ------------------------------------------------------------------ set-up helpers
+    def _make_eta(self, eta, n):
+        if eta is None:
+            return np.full(n, self.dt * self.material.damping_scale)
+        arr = np.asarray(eta, dtype=np.float64)
+        if arr.ndim == 0:
+            return np.full(n, float(arr))
+        return np.ascontiguousarray(arr).copy()
+
+    def _alloc_lists(self, n: int) -> None:
+        k = self.capacity
+        self.nbr = np.zeros((n, k), np.int32)
+        self.n_nbr = np.zeros(n, np.int32)
+        self.shear = np.zeros((n, k))
+        self.bond = np.zeros((n, k), np.uint8)
+        self._new_nbr = np.zeros((n, k), np.int32)
+        self._new_n = np.zeros(n, np.int32)
+        self._new_shear = np.zeros((n, k))
+        self._new_bond = np.zeros((n, k), np.uint8)
+        self._cell_head = np.zeros(max(4 * n, 64), np.int64)
+        self._cell_next = np.zeros(n, np.int64)
+        self.pos_ref = np.full((n, 2), np.inf)
+
+    def _grow_capacity(self) -> None:
+        old = (self.nbr, self.n_nbr, self.shear, self.bond)
+        n = self.n
+        self.capacity *= 2
+        ref = self.pos_ref.copy()
+        self._alloc_lists(n)
+        k = old[0].shape[1]
+        self.nbr[:, :k] = old[0]
+        self.n_nbr[:] = old[1]
+        self.shear[:, :k] = old[2]
+        self.bond[:, :k] = old[3]
+        self.pos_ref[:] = ref
+
+    @property
+    def n(self) -> int:
+        return int(self.radius.shape[0])
+
+    def set_walls(self, walls: np.ndarray, wall_vel: np.ndarray | None = None) -> None:
+        """Replace the walls: (nw, 4) segments [x0, y0, x1, y1] and (nw, 2) velocities."""
+        walls = np.ascontiguousarray(walls, dtype=np.float64).reshape(-1, 4).copy()
+        nw = walls.shape[0]
+        if wall_vel is None:
+            wall_vel = np.zeros((nw, 2))
+        self.walls = walls
+        self.wall_vel = np.ascontiguousarray(wall_vel, dtype=np.float64).reshape(nw, 2).copy()
+        if self.wall_shear.shape != (self.n, nw):
+            self.wall_shear = np.zeros((self.n, nw))
+        self._forces_valid = False
+
+    def rebuild(self) -> None:
+        """Rebuild the Verlet list now (keeps pair history of pairs that stay listed)."""
+        while True:
+            st = K.build_neighbours(self.pos, self.radius, self.skin, self.nbr, self.n_nbr,
+                                    self.shear, self.bond, self._new_nbr, self._new_n,
+                                    self._new_shear, self._new_bond, self._cell_head,
+                                    self._cell_next)
+            if st == 0:
+                break
+            self._grow_capacity()
+        self.pos_ref[:] = self.pos
+        self._forces_valid = False
+
+    def bond_initial_contacts(self, tol_frac: float = 0.05) -> int:
+        """Bond every listed pair with d < (r_i + r_j)(1 + tol_frac) (the bonded model).
+
+        Returns the number of bonds made.
+        """
+        self.rebuild()
+        nb = 0
+        for i in range(self.n):
+            m = self.n_nbr[i]
+            if m == 0:
+                continue
+            js = self.nbr[i, :m]
+            d = np.hypot(*(self.pos[js] - self.pos[i]).T)
+            ok = d < (self.radius[i] + self.radius[js]) * (1 + tol_frac)
+            self.bond[i, :m] = ok
+            nb += int(ok.sum())
+        return nb
+
+    def compute_forces(self) -> None:
+        """Evaluate the forces of the current state into ``self.force`` (no history change
+        beyond what one evaluation does)."""
+        K.body_forces(self.vel, self.mass, self.eta, self.material.gravity_m_s2, self.force)
+        K.pair_forces(self.pos, self.vel, self.radius, self.nbr, self.n_nbr, self.shear,
+                      self.bond, self.kn, self.ks, self.mu, self.c0, self.r0, self.dt,
+                      self.force)
+        if self.walls.shape[0]:
+            K.wall_forces(self.pos, self.vel, self.radius, self.walls, self.wall_vel,
+                          self.wall_shear, self.kn, self.ks, self.wall_mu, self.dt, self.force)
+        self._forces_valid = True
+
+    # ------------------------------------------------------------------ stepping
+    def run(self, n_steps: int) -> None:
+        """Advance ``n_steps`` steps; raise :class:`SimulationError` on instability."""
+        if not self._forces_valid:
+            if not np.all(np.isfinite(self.pos_ref)):
+                self.rebuild()
+            self.compute_forces()
+        done = 0
+        while done < n_steps:
+            st, k, bad, nreb, nbrk = K.run_steps(
+                n_steps - done, self.dt, self.pos, self.vel, self.force, self.radius,
+                self.mass, self.inv_mass, self.eta, self.material.gravity_m_s2,
+                self.kn, self.ks, self.mu, self.c0, self.r0, self.kn, self.wall_mu,
+                self.nbr, self.n_nbr, self.shear, self.bond, self.pos_ref, self.skin,
+                self._new_nbr, self._new_n, self._new_shear, self._new_bond,
+                self._cell_head, self._cell_next,
+                self.walls, self.wall_vel, self.wall_shear, self.box,
+                self.vmax_limit, self.check_every)
+            done += k
+            self.steps += k
+            self.n_rebuilds += nreb
+            self.n_broken += nbrk
+            if st == K.STATUS_OK:
+                continue
+            if st == K.STATUS_NBR_OVERFLOW:
+                # the step's drift was applied but its forces were not: finish it by hand
+                self._grow_capacity()
+                self.rebuild()
+                self.compute_forces()
+                self.vel += 0.5 * self.dt * self.force * self.inv_mass[:, None]
+                done += 1
+                self.steps += 1
+                continue
+            self._raise(st, bad)
+
+    def _raise(self, st: int, bad: int) -> None:
+        t = self.steps * self.dt
+        where = ""
+        if bad >= 0:
+            where = (f" (element {bad} at x={self.pos[bad, 0]:.1f} m, y={self.pos[bad, 1]:.1f} m,"
+                     f" speed {float(np.hypot(*self.vel[bad])):.3g} m/s)")
+        if st == K.STATUS_NAN:
+            raise SimulationError(f"DEM went unstable: NaN/inf in the state at step {self.steps} "
+                                  f"(t={t:.1f} s){where}; reduce dt or Kn")
+        if st == K.STATUS_KE:
+            raise SimulationError(
+                f"DEM went unstable: kinetic-energy blow-up at step {self.steps} (t={t:.1f} s): "
+                f"an element exceeded {self.vmax_limit:.3g} m/s{where}")
+        if st == K.STATUS_BOX:
+            b = self.box
+            raise SimulationError(
+                f"DEM went unstable: an element left the box x in [{b[0]:.0f}, {b[1]:.0f}] m, "
+                f"y in [{b[2]:.0f}, {b[3]:.0f}] m at step {self.steps} (t={t:.1f} s){where}")
+        raise SimulationError(f"DEM stopped with unknown status {st}")
+
+    def kinetic_energy(self) -> float:
+        """Total kinetic energy (J per metre of thickness)."""
+        return float(0.5 * np.sum(self.mass * np.sum(self.vel**2, axis=1)))
+
+    def settle(self, max_steps: int, *, chunk: int = 500, v_tol_m_s: float = 0.05,
+               min_steps: int = 0) -> int:
+        """Run until the rms speed drops below ``v_tol_m_s`` (or ``max_steps``).
+
+        Returns the number of steps run.
+        """
+        done = 0
+        while done < max_steps:
+            k = min(chunk, max_steps - done)
+            self.run(k)
+            done += k
+            if done >= min_steps and self.n:
+                vrms = math.sqrt(float(np.mean(np.sum(self.vel**2, axis=1))))
+                if vrms < v_tol_m_s:
+                    break
+        return done
+
+    # ------------------------------------------------------------------ topology edits
+    def add_elements(self, pos: np.ndarray, radius: np.ndarray) -> None:
+        """Append elements at rest (pair history of existing elements is kept)."""
+        pos = np.asarray(pos, dtype=np.float64).reshape(-1, 2)
+        radius = np.asarray(radius, dtype=np.float64).reshape(-1)
+        m = radius.shape[0]
+        if m == 0:
+            return
+        n = self.n
+        self.pos = np.ascontiguousarray(np.vstack([self.pos, pos]))
+        self.radius = np.concatenate([self.radius, radius])
+        mass = self.material.density_kg_m3 * math.pi * radius**2
+        self.mass = np.concatenate([self.mass, mass])
+        self.inv_mass = 1.0 / self.mass
+        if self._eta_default is None or np.ndim(self._eta_default) == 0:
+            add_eta = self._make_eta(self._eta_default, m)
+        else:
+            add_eta = np.full(m, float(np.mean(self.eta)))
+        self.eta = np.concatenate([self.eta, add_eta])
+        self.vel = np.ascontiguousarray(np.vstack([self.vel, np.zeros((m, 2))]))
+        self.force = np.zeros((n + m, 2))
+        old = (self.nbr, self.n_nbr, self.shear, self.bond)
+        self._alloc_lists(n + m)
+        self.nbr[:n] = old[0]
+        self.n_nbr[:n] = old[1]
+        self.shear[:n] = old[2]
+        self.bond[:n] = old[3]
+        self.wall_shear = np.vstack([self.wall_shear, np.zeros((m, self.walls.shape[0]))])
+        self.rebuild()
