@@ -173,7 +173,7 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
     n_layers_total = max(int(s.layer.max()) for s in snapshots) + 1
     layer_props = draw_layer_properties(n_layers_total, model, rng_at(cfg, spec.run, 2))
     elem_seed = int(seed_sequence(cfg, spec.run, 2).generate_state(2, dtype=np.uint64)[1])
-    history = strain_history(snapshots)
+    history = strain_history(snapshots, cfg.labels)
 
     dtypes = array_dtypes(cfg)
     S = len(spec.renders)

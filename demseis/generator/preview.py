@@ -152,7 +152,7 @@ def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
     fmax = max(r.freq_hz for r in spec.renders)
     sec = synthetic_sections(vp_g, rho_g, grid.cell_m, [fmax])[0]
     clip = float(np.percentile(np.abs(sec), 99)) or 1.0
-    hist = strain_history(snaps)
+    hist = strain_history(snaps, cfg.labels)
     maps = label_maps(last, hist[-1], grid, cfg.labels)
     fig, axes = plt.subplots(1, 3, figsize=(18, 3.4))
     axes[0].imshow(sec, extent=extent, cmap="seismic", vmin=-clip, vmax=clip, aspect="equal")
