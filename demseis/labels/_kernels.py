@@ -1,0 +1,396 @@
+"""Numba kernels of the labels stage. Plain arrays in, plain arrays out; SI units (metres).
+
+Neighbour search uses a uniform cell list (counting sort of element indices by cell). The strain
+kernel fits, per element, a least-squares deformation gradient to its neighbours' relative
+positions. The thinning kernel is the Zhang-Suen (1984) two-subiteration algorithm.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def build_cell_list(x, y, cell):
+    """Bin points into square cells of side ``cell`` (counting sort).
+
+    Parameters
+    ----------
+    x, y : (n,) float64 point coordinates (m).
+    cell : float, cell side (m), > 0.
+
+    Returns
+    -------
+    x0, y0 : float, lower-left corner of cell (0, 0).
+    ncx, ncy : int, number of cells in x and y.
+    start : (ncx * ncy + 1,) int64; points of cell c are ``items[start[c]:start[c + 1]]``.
+    items : (n,) int64 point indices sorted by cell (cell index c = cy * ncx + cx).
+    """
+    n = x.shape[0]
+    x0 = x.min() if n > 0 else 0.0
+    y0 = y.min() if n > 0 else 0.0
+    x1 = x.max() if n > 0 else 0.0
+    y1 = y.max() if n > 0 else 0.0
+    ncx = int((x1 - x0) / cell) + 1
+    ncy = int((y1 - y0) / cell) + 1
+    counts = np.zeros(ncx * ncy + 1, dtype=np.int64)
+    home = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        cx = int((x[i] - x0) / cell)
+        cy = int((y[i] - y0) / cell)
+        if cx >= ncx:
+            cx = ncx - 1
+        if cy >= ncy:
+            cy = ncy - 1
+        c = cy * ncx + cx
+        home[i] = c
+        counts[c + 1] += 1
+    start = np.cumsum(counts)
+    fill = start[:-1].copy()
+    items = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        c = home[i]
+        items[fill[c]] = i
+        fill[c] += 1
+    return x0, y0, ncx, ncy, start, items
+
+
+@njit(cache=True)
+def radius_neighbours(x, y, radius, factor):
+    """Neighbours by distance: j is a neighbour of i when ``|p_j - p_i| <= factor * (r_i + r_j)``.
+
+    Parameters
+    ----------
+    x, y : (n,) float64 reference centres (m).
+    radius : (n,) float64 radii (m), > 0.
+    factor : float, > 0; 1.0 selects touching disks, larger values reach further.
+
+    Returns
+    -------
+    offsets : (n + 1,) int64; neighbours of i are ``index[offsets[i]:offsets[i + 1]]``.
+    index : (m,) int64 neighbour indices, ascending within each element, never i itself.
+    """
+    n = x.shape[0]
+    offsets = np.zeros(n + 1, dtype=np.int64)
+    if n == 0:
+        return offsets, np.empty(0, dtype=np.int64)
+    cell = 2.0 * factor * radius.max()
+    x0, y0, ncx, ncy, start, items = build_cell_list(x, y, cell)
+    # pass 1: count
+    for i in range(n):
+        cx = min(int((x[i] - x0) / cell), ncx - 1)
+        cy = min(int((y[i] - y0) / cell), ncy - 1)
+        cnt = 0
+        for gy in range(max(cy - 1, 0), min(cy + 2, ncy)):
+            for gx in range(max(cx - 1, 0), min(cx + 2, ncx)):
+                c = gy * ncx + gx
+                for s in range(start[c], start[c + 1]):
+                    j = items[s]
+                    if j == i:
+                        continue
+                    dx = x[j] - x[i]
+                    dy = y[j] - y[i]
+                    lim = factor * (radius[i] + radius[j])
+                    if dx * dx + dy * dy <= lim * lim:
+                        cnt += 1
+        offsets[i + 1] = offsets[i] + cnt
+    index = np.empty(offsets[n], dtype=np.int64)
+    # pass 2: fill
+    for i in range(n):
+        cx = min(int((x[i] - x0) / cell), ncx - 1)
+        cy = min(int((y[i] - y0) / cell), ncy - 1)
+        p = offsets[i]
+        for gy in range(max(cy - 1, 0), min(cy + 2, ncy)):
+            for gx in range(max(cx - 1, 0), min(cx + 2, ncx)):
+                c = gy * ncx + gx
+                for s in range(start[c], start[c + 1]):
+                    j = items[s]
+                    if j == i:
+                        continue
+                    dx = x[j] - x[i]
+                    dy = y[j] - y[i]
+                    lim = factor * (radius[i] + radius[j])
+                    if dx * dx + dy * dy <= lim * lim:
+                        index[p] = j
+                        p += 1
+        index[offsets[i]:offsets[i + 1]].sort()
+    return offsets, index
+
+
+@njit(cache=True)
+def knn_neighbours(x, y, k):
+    """The ``k`` nearest other points of every point (Euclidean), by expanding cell-list rings.
+
+    Parameters
+    ----------
+    x, y : (n,) float64 reference centres (m).
+    k : int, 1 <= k <= n - 1.
+
+    Returns
+    -------
+    offsets : (n + 1,) int64, ``offsets[i] = i * k``.
+    index : (n * k,) int64 neighbour indices of each point, nearest first (ties: lower index).
+    """
+    n = x.shape[0]
+    offsets = np.arange(n + 1).astype(np.int64) * k
+    index = np.empty(n * k, dtype=np.int64)
+    if n == 0:
+        return offsets, index
+    w = max(x.max() - x.min(), 1e-12)
+    h = max(y.max() - y.min(), 1e-12)
+    # about 2 points per cell
+    cell = np.sqrt(w * h * 2.0 / n)
+    if cell <= 0.0:
+        cell = 1.0
+    x0, y0, ncx, ncy, start, items = build_cell_list(x, y, cell)
+    bd = np.empty(k, dtype=np.float64)
+    bi = np.empty(k, dtype=np.int64)
+    maxring = max(ncx, ncy)
+    for i in range(n):
+        cx = min(int((x[i] - x0) / cell), ncx - 1)
+        cy = min(int((y[i] - y0) / cell), ncy - 1)
+        m = 0
+        ring = 0
+        while ring <= maxring:
+            for gy in range(cy - ring, cy + ring + 1):
+                if gy < 0 or gy >= ncy:
+                    continue
+                on_edge_y = gy == cy - ring or gy == cy + ring
+                step = 1 if on_edge_y else 2 * ring
+                gx = cx - ring
+                while gx <= cx + ring:
+                    if 0 <= gx < ncx:
+                        c = gy * ncx + gx
+                        for s in range(start[c], start[c + 1]):
+                            j = items[s]
+                            if j == i:
+                                continue
+                            dx = x[j] - x[i]
+                            dy = y[j] - y[i]
+                            d2 = dx * dx + dy * dy
+                            if m < k:
+                                pos = m
+                                m += 1
+                            elif d2 < bd[k - 1] or (d2 == bd[k - 1] and j < bi[k - 1]):
+                                pos = k - 1
+                            else:
+                                continue
+                            # insertion into the sorted buffer
+                            while pos > 0 and (
+                                bd[pos - 1] > d2 or (bd[pos - 1] == d2 and bi[pos - 1] > j)
+                            ):
+                                bd[pos] = bd[pos - 1]
+                                bi[pos] = bi[pos - 1]
+                                pos -= 1
+                            bd[pos] = d2
+                            bi[pos] = j
+                    if step == 0:
+                        break
+                    gx += step
+            # every point outside the rings scanned so far is at least ring * cell away
+            if m == k and bd[k - 1] <= (ring * cell) * (ring * cell):
+                break
+            ring += 1
+        for q in range(k):
+            index[i * k + q] = bi[q]
+    return offsets, index
+
+
+@njit(cache=True)
+def finite_strain(ref_x, ref_y, cur_x, cur_y, offsets, index, min_neighbours, cond_min,
+                  out_f, out_gamma, out_vol, out_nn, out_valid):
+    """Least-squares deformation gradient and finite strain of every element.
+
+    For element i with neighbours j, dX_j = X_j - X_i (reference) and dx_j = x_j - x_i
+    (current). F minimises sum_j |dx_j - F dX_j|^2, i.e. F = (sum dx dX^T)(sum dX dX^T)^-1.
+    C = F^T F has eigenvalues lambda1 >= lambda2 (quadratic elongations) and
+    gamma_max = (lambda1 - lambda2) / (2 sqrt(lambda1 lambda2)); volumetric = det(F) - 1
+    (relative area change).
+
+    Parameters
+    ----------
+    ref_x, ref_y, cur_x, cur_y : (n,) float64 reference and current centres (m).
+    offsets, index : neighbour lists (CSR) from :func:`radius_neighbours` / :func:`knn_neighbours`.
+    min_neighbours : int, fewer neighbours than this -> invalid.
+    cond_min : float, invalid when the reference neighbour cloud is nearly collinear:
+        eigmin(A) / eigmax(A) < cond_min with A = sum dX dX^T.
+    out_f : (n, 2, 2) float64, written: F (NaN where invalid).
+    out_gamma, out_vol : (n,) float64, written: gamma_max and det(F) - 1 (NaN where invalid).
+    out_nn : (n,) int64, written: neighbour count.
+    out_valid : (n,) bool, written: enough, non-collinear neighbours and det(F) > 0.
+    """
+    n = ref_x.shape[0]
+    for i in range(n):
+        a00 = 0.0
+        a01 = 0.0
+        a11 = 0.0
+        b00 = 0.0
+        b01 = 0.0
+        b10 = 0.0
+        b11 = 0.0
+        nn = offsets[i + 1] - offsets[i]
+        out_nn[i] = nn
+        for s in range(offsets[i], offsets[i + 1]):
+            j = index[s]
+            dX = ref_x[j] - ref_x[i]
+            dY = ref_y[j] - ref_y[i]
+            dx = cur_x[j] - cur_x[i]
+            dy = cur_y[j] - cur_y[i]
+            a00 += dX * dX
+            a01 += dX * dY
+            a11 += dY * dY
+            b00 += dx * dX
+            b01 += dx * dY
+            b10 += dy * dX
+            b11 += dy * dY
+        ok = nn >= min_neighbours and nn >= 2
+        deta = a00 * a11 - a01 * a01
+        tr = a00 + a11
+        if ok:
+            disc = np.sqrt(max((a00 - a11) * (a00 - a11) * 0.25 + a01 * a01, 0.0))
+            emax = 0.5 * tr + disc
+            emin = 0.5 * tr - disc
+            if emax <= 0.0 or emin < cond_min * emax or deta <= 0.0:
+                ok = False
+        if ok:
+            # F = B A^-1 with A^-1 = [[a11, -a01], [-a01, a00]] / det
+            f00 = (b00 * a11 - b01 * a01) / deta
+            f01 = (-b00 * a01 + b01 * a00) / deta
+            f10 = (b10 * a11 - b11 * a01) / deta
+            f11 = (-b10 * a01 + b11 * a00) / deta
+            detf = f00 * f11 - f01 * f10
+            if detf <= 0.0:
+                ok = False
+        if not ok:
+            out_valid[i] = False
+            out_gamma[i] = np.nan
+            out_vol[i] = np.nan
+            out_f[i, 0, 0] = np.nan
+            out_f[i, 0, 1] = np.nan
+            out_f[i, 1, 0] = np.nan
+            out_f[i, 1, 1] = np.nan
+            continue
+        # C = F^T F
+        c00 = f00 * f00 + f10 * f10
+        c01 = f00 * f01 + f10 * f11
+        c11 = f01 * f01 + f11 * f11
+        half_diff = np.sqrt((c00 - c11) * (c00 - c11) * 0.25 + c01 * c01)
+        # lambda1 - lambda2 = 2 half_diff; lambda1 lambda2 = det(C) = det(F)^2
+        out_gamma[i] = half_diff / detf
+        out_vol[i] = detf - 1.0
+        out_f[i, 0, 0] = f00
+        out_f[i, 0, 1] = f01
+        out_f[i, 1, 0] = f10
+        out_f[i, 1, 1] = f11
+        out_valid[i] = True
+
+
+@njit(cache=True)
+def power_nearest(x, y, radius, inflate, x0, top, cell, nz, nx, out_index):
+    """Per grid cell, the element of least power distance d^2 - r^2 among those within reach.
+
+    An element reaches a cell when the cell centre lies within ``inflate * r`` of its centre;
+    the power distance picks the Laguerre (power-diagram) cell of polydisperse disks, so a cell
+    in a gap between disks goes to the disk it is "most inside".
+
+    Parameters
+    ----------
+    x, y, radius : (n,) float64 element centres (m, y up) and radii (m).
+    inflate : float >= 1, reach as a multiple of the radius.
+    x0, top, cell : grid left edge, top elevation and cell size (m).
+    nz, nx : grid rows and columns.
+    out_index : (nz, nx) int64, written: element index, -1 where no element reaches.
+    """
+    best = np.full((nz, nx), np.inf)
+    out_index[:, :] = -1
+    for e in range(x.shape[0]):
+        rr = inflate * radius[e]
+        r2 = radius[e] * radius[e]
+        j0 = max(int(np.ceil((x[e] - rr - x0) / cell - 0.5)), 0)
+        j1 = min(int(np.floor((x[e] + rr - x0) / cell - 0.5)), nx - 1)
+        i0 = max(int(np.ceil((top - (y[e] + rr)) / cell - 0.5)), 0)
+        i1 = min(int(np.floor((top - (y[e] - rr)) / cell - 0.5)), nz - 1)
+        for i in range(i0, i1 + 1):
+            dy = top - (i + 0.5) * cell - y[e]
+            for j in range(j0, j1 + 1):
+                dx = x0 + (j + 0.5) * cell - x[e]
+                d2 = dx * dx + dy * dy
+                if d2 <= rr * rr:
+                    p = d2 - r2
+                    if p < best[i, j]:
+                        best[i, j] = p
+                        out_index[i, j] = e
+
+
+@njit(cache=True)
+def zhang_suen_thin(mask):
+    """Zhang-Suen (1984) thinning of a binary image to a one-cell-wide 8-connected skeleton.
+
+    Parameters
+    ----------
+    mask : (nz, nx) uint8, 1 = foreground. Not modified. Border cells are treated as having
+        background outside the image.
+
+    Returns
+    -------
+    (nz, nx) uint8 skeleton.
+    """
+    nz, nx = mask.shape
+    img = np.zeros((nz + 2, nx + 2), dtype=np.uint8)
+    img[1:-1, 1:-1] = mask != 0
+    changed = True
+    rem_i = np.empty(nz * nx, dtype=np.int64)
+    rem_j = np.empty(nz * nx, dtype=np.int64)
+    while changed:
+        changed = False
+        for sub in range(2):
+            m = 0
+            for i in range(1, nz + 1):
+                for j in range(1, nx + 1):
+                    if img[i, j] == 0:
+                        continue
+                    p2 = img[i - 1, j]
+                    p3 = img[i - 1, j + 1]
+                    p4 = img[i, j + 1]
+                    p5 = img[i + 1, j + 1]
+                    p6 = img[i + 1, j]
+                    p7 = img[i + 1, j - 1]
+                    p8 = img[i, j - 1]
+                    p9 = img[i - 1, j - 1]
+                    b = p2 + p3 + p4 + p5 + p6 + p7 + p8 + p9
+                    if b < 2 or b > 6:
+                        continue
+                    a = 0
+                    if p2 == 0 and p3 == 1:
+                        a += 1
+                    if p3 == 0 and p4 == 1:
+                        a += 1
+                    if p4 == 0 and p5 == 1:
+                        a += 1
+                    if p5 == 0 and p6 == 1:
+                        a += 1
+                    if p6 == 0 and p7 == 1:
+                        a += 1
+                    if p7 == 0 and p8 == 1:
+                        a += 1
+                    if p8 == 0 and p9 == 1:
+                        a += 1
+                    if p9 == 0 and p2 == 1:
+                        a += 1
+                    if a != 1:
+                        continue
+                    if sub == 0:
+                        if p2 * p4 * p6 != 0 or p4 * p6 * p8 != 0:
+                            continue
+                    else:
+                        if p2 * p4 * p8 != 0 or p2 * p6 * p8 != 0:
+                            continue
+                    rem_i[m] = i
+                    rem_j[m] = j
+                    m += 1
+            for q in range(m):
+                img[rem_i[q], rem_j[q]] = 0
+            if m > 0:
+                changed = True
+    return img[1:-1, 1:-1].copy()

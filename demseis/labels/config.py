@@ -1,0 +1,125 @@
+"""Configuration of the labels stage (the ``[labels]`` table of a sweep config maps 1:1 onto it)."""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass, fields
+from typing import Any
+
+from demseis.errors import ConfigError
+
+STRAIN_MEASURES = ("total", "cumulative")
+NEIGHBOUR_METHODS = ("radius", "knn")
+
+
+@dataclass(frozen=True)
+class LabelConfig:
+    """How per-element strain becomes fault, damage-zone, strain and layer labels.
+
+    All strains are dimensionless maximum shear strains
+    ``gamma_max = (lambda1 - lambda2) / (2 sqrt(lambda1 lambda2))``; lengths in grid cells
+    refer to the grid the labels are drawn on (10 m cells by default).
+
+    Attributes
+    ----------
+    strain_measure : ``"total"`` (finite strain of each snapshot against the element's first
+        appearance) or ``"cumulative"`` (sum of the incremental strains between consecutive
+        snapshots; never smaller than the total in a monotonic shear zone and it remembers
+        strain that was later undone). Which one drives the masks.
+    neighbour_method : ``"radius"`` (neighbours j of i with ``|X_j - X_i| <= neighbour_radius_factor
+        * (r_i + r_j)`` in the reference state) or ``"knn"`` (the ``neighbour_k`` nearest centres).
+    neighbour_radius_factor : multiple of the summed radii, in (0.5, 5]. 1.0 catches touching
+        disks only; the default 1.5 also takes the near part of the second shell (~10 neighbours).
+    neighbour_k : number of nearest neighbours for ``"knn"``, in [3, 64].
+    min_neighbours : elements with fewer neighbours are flagged invalid (strain NaN), in [2, 64].
+    fault_threshold : gamma_max at or above which a cell is fault (core), in (0, 100].
+    damage_threshold : gamma_max at or above which a cell is damage zone, in (0, fault_threshold].
+    min_component_cells : 8-connected fault components with fewer cells (before thinning) are
+        dropped; damage-zone components smaller than this are dropped too, in [0, 1e6].
+    smooth_sigma_cells : Gaussian sigma (cells) applied to the rasterised strain before
+        thresholding, in [0, 20]; 0 = none. The regression target is not smoothed.
+    thickness_cells : fault-mask thickness control, in [0, 50]. 0 keeps the thresholded mask
+        as it is; a value t >= 1 thins the mask to its one-cell skeleton and dilates it to a
+        band of about t cells measured perpendicular to the fault (cells whose centre lies
+        within t/2 of the skeleton).
+    centreline_window_cells : with ``thickness_cells >= 1``: the skeleton's branches are
+        moving-averaged over this many cells along their length (removes the element-scale
+        stepping of the band edges; ~4 element diameters at 10 m cells) and spurs up to half
+        this length are pruned, in [1, 201]; 1 = raw skeleton.
+    """
+
+    strain_measure: str = "cumulative"
+    neighbour_method: str = "radius"
+    neighbour_radius_factor: float = 1.5
+    neighbour_k: int = 10
+    min_neighbours: int = 3
+    fault_threshold: float = 0.5
+    damage_threshold: float = 0.15
+    min_component_cells: int = 30
+    smooth_sigma_cells: float = 1.0
+    thickness_cells: float = 1.0
+    centreline_window_cells: int = 15
+
+    def validate(self) -> "LabelConfig":
+        """Check every field; returns ``self`` so it chains.
+
+        Raises
+        ------
+        demseis.errors.ConfigError
+            Naming the field, its value and the allowed range or choices.
+        """
+        _choice("strain_measure", self.strain_measure, STRAIN_MEASURES)
+        _choice("neighbour_method", self.neighbour_method, NEIGHBOUR_METHODS)
+        _number("neighbour_radius_factor", self.neighbour_radius_factor, 0.5, 5.0, lo_open=True)
+        _integer("neighbour_k", self.neighbour_k, 3, 64)
+        _integer("min_neighbours", self.min_neighbours, 2, 64)
+        if self.neighbour_method == "knn" and self.min_neighbours > self.neighbour_k:
+            raise ConfigError(
+                f"labels.min_neighbours = {self.min_neighbours} exceeds labels.neighbour_k = "
+                f"{self.neighbour_k}; allowed: min_neighbours <= neighbour_k"
+            )
+        _number("fault_threshold", self.fault_threshold, 0.0, 100.0, lo_open=True)
+        _number("damage_threshold", self.damage_threshold, 0.0, float(self.fault_threshold),
+                lo_open=True)
+        _integer("min_component_cells", self.min_component_cells, 0, 1_000_000)
+        _number("smooth_sigma_cells", self.smooth_sigma_cells, 0.0, 20.0)
+        _number("thickness_cells", self.thickness_cells, 0.0, 50.0)
+        _integer("centreline_window_cells", self.centreline_window_cells, 1, 201)
+        return self
+
+    @classmethod
+    def from_mapping(cls, table: dict[str, Any]) -> "LabelConfig":
+        """Build from a ``[labels]`` TOML table; unknown keys and bad values raise ConfigError."""
+        if not isinstance(table, dict):
+            raise ConfigError(f"[labels] must be a table, got {type(table).__name__}")
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(table) - known)
+        if unknown:
+            raise ConfigError(
+                f"unknown key(s) in [labels]: {', '.join(unknown)}; allowed: {', '.join(sorted(known))}"
+            )
+        return cls(**table).validate()
+
+
+def _choice(name: str, value: Any, choices: tuple[str, ...]) -> None:
+    if not isinstance(value, str) or value not in choices:
+        raise ConfigError(f"labels.{name} = {value!r}; allowed: {' | '.join(map(repr, choices))}")
+
+
+def _number(name: str, value: Any, lo: float, hi: float, lo_open: bool = False) -> None:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ConfigError(f"labels.{name} = {value!r} is not a number; allowed: "
+                          f"{'(' if lo_open else '['}{lo}, {hi}]")
+    v = float(value)
+    bad = (not math.isfinite(v)) or v > hi or (v <= lo if lo_open else v < lo)
+    if bad:
+        raise ConfigError(f"labels.{name} = {value!r} out of range; allowed: "
+                          f"{'(' if lo_open else '['}{lo}, {hi}]")
+
+
+def _integer(name: str, value: Any, lo: int, hi: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ConfigError(f"labels.{name} = {value!r} is not an integer; allowed: [{lo}, {hi}]")
+    if value < lo or value > hi:
+        raise ConfigError(f"labels.{name} = {value!r} out of range; allowed: [{lo}, {hi}]")

@@ -1,0 +1,292 @@
+"""Label maps on the seismic grid: fault mask, damage-zone classes, strain target, layer ids.
+
+Pipeline (per snapshot), all on the :class:`demseis.seismic.grid.Grid` the seismic uses, so the
+labels are pixel-aligned with it:
+
+1. per-element strain -> grid with :func:`demseis.seismic.raster.rasterise` (mean over the disks
+   containing each cell centre); cells in the gaps between disks take the value of their
+   power-diagram element (least d^2 - r^2 within 1.5 r); cells no element reaches (above the
+   free surface) are "no rock": strain 0, layer -1, never fault.
+2. optional Gaussian smoothing (``smooth_sigma_cells``) of the strain used for thresholding.
+3. fault = strain >= ``fault_threshold``; 8-connected components smaller than
+   ``min_component_cells`` dropped; with ``thickness_cells`` = t >= 1 the mask is thinned to a
+   one-cell skeleton (Zhang-Suen) and re-grown to the cells within t/2 of the skeleton.
+4. damage = 0 background, 1 strain >= ``damage_threshold`` (small components dropped),
+   2 fault core (the fault mask).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from demseis.errors import InputError
+from demseis.labels import _kernels
+from demseis.labels.config import LabelConfig
+from demseis.labels.strain import StrainState
+
+#: A cell belongs to the rock when it lies within this multiple of an element's radius.
+ROCK_REACH = 1.5
+_EIGHT = np.ones((3, 3), dtype=bool)
+
+
+def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = None) -> dict:
+    """Fault, damage-zone, strain and layer labels of one snapshot on ``grid``.
+
+    Parameters
+    ----------
+    snapshot : :class:`demseis.dem.types.Snapshot` (uses ``xy``, ``radius``, ``layer``).
+    strain_per_element : (n,) gamma_max aligned with the snapshot's elements (NaN = unknown,
+        ignored), or the snapshot's :class:`~demseis.labels.strain.StrainState`, in which case
+        ``config.strain_measure`` picks total or cumulative.
+    grid : :class:`demseis.seismic.grid.Grid`, row 0 at the top.
+    config : :class:`LabelConfig` (defaults if None).
+
+    Returns
+    -------
+    dict with (nz, nx) arrays:
+        ``fault`` uint8 0/1; ``damage`` uint8 0 background / 1 damage zone / 2 fault core;
+        ``strain`` float32 rasterised gamma_max (unsmoothed; 0 outside the rock);
+        ``layer`` int16 layer id of the cell's element (-1 outside the rock).
+    """
+    cfg = (config or LabelConfig()).validate()
+    xy = np.asarray(snapshot.xy, dtype=np.float64)
+    radius = np.asarray(snapshot.radius, dtype=np.float64)
+    layer = np.asarray(snapshot.layer)
+    n = xy.shape[0]
+    if isinstance(strain_per_element, StrainState):
+        strain_e = strain_per_element.measure(cfg.strain_measure)
+    else:
+        strain_e = np.asarray(strain_per_element, dtype=np.float64)
+    if strain_e.shape != (n,):
+        raise InputError(
+            f"strain_per_element has shape {strain_e.shape}; expected ({n},) like the snapshot"
+        )
+    if layer.shape != (n,):
+        raise InputError(f"snapshot.layer has shape {layer.shape}; expected ({n},)")
+    strain, owner = rasterise_strain(xy, radius, strain_e, grid)
+    rock = owner >= 0
+    layer_map = np.full(grid.shape, -1, dtype=np.int16)
+    layer_map[rock] = layer[owner[rock]].astype(np.int16)
+    fault = fault_mask(strain, cfg, rock=rock)
+    damage = damage_map(strain, fault, cfg, rock=rock)
+    return {"fault": fault, "damage": damage, "strain": strain.astype(np.float32),
+            "layer": layer_map}
+
+
+def rasterise_strain(xy: np.ndarray, radius: np.ndarray, values: np.ndarray,
+                     grid) -> tuple[np.ndarray, np.ndarray]:
+    """Per-element values on ``grid``, gaps filled, and the owning element of every cell.
+
+    Parameters
+    ----------
+    xy : (n, 2) centres (m, y up); radius : (n,) radii (m); values : (n,) float, NaN = unknown.
+    grid : target grid.
+
+    Returns
+    -------
+    field : (nz, nx) float64. Mean of the known values of the disks containing the cell centre
+        (:func:`demseis.seismic.raster.rasterise`); where there is none, the value of the
+        cell's power-diagram element if known, else of the nearest filled cell; 0 where no
+        element reaches the cell (outside the rock).
+    owner : (nz, nx) int64 power-diagram element of each cell (-1 outside the rock).
+    """
+    from demseis.seismic.raster import rasterise
+
+    xy = np.asarray(xy, dtype=np.float64)
+    radius = np.asarray(radius, dtype=np.float64)
+    values = np.asarray(values, dtype=np.float64)
+    known = np.isfinite(values)
+    owner = np.empty(grid.shape, dtype=np.int64)
+    _kernels.power_nearest(np.ascontiguousarray(xy[:, 0]), np.ascontiguousarray(xy[:, 1]),
+                           radius, ROCK_REACH, float(grid.x0_m), float(grid.top_m),
+                           float(grid.cell_m), grid.nz, grid.nx, owner)
+    rock = owner >= 0
+    if known.any():
+        field, _ = rasterise(xy[known], radius[known], values[known], grid)
+    else:
+        field = np.full(grid.shape, np.nan)
+    gap = ~np.isfinite(field) & rock
+    from_owner = values[owner[gap]]
+    field[gap] = from_owner
+    field[~rock] = np.nan
+    missing = ~np.isfinite(field) & rock
+    if missing.any():
+        have = np.isfinite(field)
+        if have.any():
+            idx = ndimage.distance_transform_edt(~have, return_distances=False,
+                                                 return_indices=True)
+            field[missing] = field[idx[0][missing], idx[1][missing]]
+        else:
+            field[missing] = 0.0
+    field[~rock] = 0.0
+    return field, owner
+
+
+def fault_mask(strain: np.ndarray, config: LabelConfig | None = None,
+               rock: np.ndarray | None = None) -> np.ndarray:
+    """Binary fault mask from a rasterised strain field.
+
+    Parameters
+    ----------
+    strain : (nz, nx) float gamma_max on the grid.
+    config : thresholds, smoothing, minimum component size and thickness control.
+    rock : (nz, nx) bool, cells inside the rock (default: all); the mask is 0 elsewhere.
+
+    Returns
+    -------
+    (nz, nx) uint8, 1 = fault.
+    """
+    cfg = (config or LabelConfig()).validate()
+    s = _smoothed(strain, cfg.smooth_sigma_cells, rock)
+    mask = s >= cfg.fault_threshold
+    if rock is not None:
+        mask &= rock
+    mask = remove_small_components(mask, cfg.min_component_cells)
+    if cfg.thickness_cells > 0:
+        mask = thin_and_dilate(mask, cfg.thickness_cells, cfg.centreline_window_cells,
+                               cfg.centreline_window_cells // 2)
+        if rock is not None:
+            mask &= rock
+    return mask.astype(np.uint8)
+
+
+def damage_map(strain: np.ndarray, fault: np.ndarray, config: LabelConfig | None = None,
+               rock: np.ndarray | None = None) -> np.ndarray:
+    """Three-class map: 0 background, 1 damage zone (strain >= damage_threshold), 2 fault core.
+
+    Parameters
+    ----------
+    strain : (nz, nx) gamma_max on the grid.
+    fault : (nz, nx) fault mask (nonzero = fault core), e.g. from :func:`fault_mask`.
+    config : ``damage_threshold``, ``smooth_sigma_cells``, ``min_component_cells``.
+    rock : (nz, nx) bool cells inside the rock (default: all).
+    """
+    cfg = (config or LabelConfig()).validate()
+    s = _smoothed(strain, cfg.smooth_sigma_cells, rock)
+    dz = s >= cfg.damage_threshold
+    if rock is not None:
+        dz &= rock
+    dz = remove_small_components(dz, cfg.min_component_cells)
+    out = dz.astype(np.uint8)
+    out[np.asarray(fault) != 0] = 2
+    return out
+
+
+def _smoothed(strain: np.ndarray, sigma: float, rock: np.ndarray | None) -> np.ndarray:
+    s = np.asarray(strain, dtype=np.float64)
+    if sigma <= 0:
+        return s
+    if rock is None:
+        return ndimage.gaussian_filter(s, sigma, mode="nearest")
+    # normalised convolution: smooth only over rock cells so the free surface does not dilute
+    w = rock.astype(np.float64)
+    num = ndimage.gaussian_filter(np.where(rock, s, 0.0), sigma, mode="nearest")
+    den = ndimage.gaussian_filter(w, sigma, mode="nearest")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.where(den > 1e-6, num / den, 0.0)
+    return out
+
+
+def remove_small_components(mask: np.ndarray, min_cells: int) -> np.ndarray:
+    """Drop 8-connected components of ``mask`` with fewer than ``min_cells`` cells."""
+    mask = np.asarray(mask, dtype=bool)
+    if min_cells <= 1 or not mask.any():
+        return mask.copy()
+    lab, nlab = ndimage.label(mask, structure=_EIGHT)
+    sizes = np.bincount(lab.ravel(), minlength=nlab + 1)
+    keep = sizes >= min_cells
+    keep[0] = False
+    return keep[lab]
+
+
+def thin_and_dilate(mask: np.ndarray, thickness_cells: float, window_cells: int = 1,
+                    prune_cells: int = 0) -> np.ndarray:
+    """Thin ``mask`` to a centre line, then keep the cells within ``thickness_cells / 2`` of it.
+
+    Steps: Zhang-Suen skeleton; spurs of at most ``prune_cells`` cells (end point to junction)
+    removed; branch coordinates moving-averaged over ``window_cells`` cells along the branch
+    (see :mod:`demseis.labels.centreline`); band of cells whose centre lies within
+    ``thickness_cells / 2`` of the centre line (``thickness_cells <= 1``: the line itself).
+    The mask is mirrored by a margin first so that bands leaving through the grid edge keep
+    their centre line up to the edge (thinning would otherwise shorten them by half a width).
+
+    Parameters
+    ----------
+    mask : (nz, nx) bool.
+    thickness_cells : target thickness t (cells, perpendicular to the band).
+    window_cells : along-line smoothing length (cells), 1 = none.
+    prune_cells : longest spur removed (cells), 0 = none.
+
+    Returns
+    -------
+    (nz, nx) bool.
+    """
+    from demseis.labels.centreline import prune_spurs, smooth_skeleton
+
+    mask = np.asarray(mask, dtype=bool)
+    if not mask.any():
+        return mask.copy()
+    # the margin must exceed the half-width of the widest band reaching the edge
+    dist = ndimage.distance_transform_edt(mask)
+    pad = int(np.ceil(dist.max())) + 2 + int(window_cells) // 2
+    padded = np.pad(mask, pad, mode="symmetric")
+    # holes enclosed by the band (a low-strain grain inside a shear band) would become loops of
+    # the skeleton; fill those up to window_cells^2 / 2 cells
+    padded = fill_small_holes(padded, max(int(window_cells) ** 2 // 2, 8))
+    skel = _kernels.zhang_suen_thin(padded.astype(np.uint8)).astype(bool)
+    if prune_cells > 0:
+        skel = prune_spurs(skel, int(prune_cells))
+    if window_cells > 1:
+        skel = smooth_skeleton(skel, int(window_cells))
+    if thickness_cells > 1.0 and skel.any():
+        skel = ndimage.distance_transform_edt(~skel) <= 0.5 * thickness_cells
+    return skel[pad:-pad, pad:-pad]
+
+
+def fill_small_holes(mask: np.ndarray, max_cells: int) -> np.ndarray:
+    """Fill the holes of ``mask`` (4-connected background enclosed by it) of at most
+    ``max_cells`` cells."""
+    mask = np.asarray(mask, dtype=bool)
+    holes = ndimage.binary_fill_holes(mask) & ~mask
+    if not holes.any():
+        return mask.copy()
+    lab, nlab = ndimage.label(holes)
+    sizes = np.bincount(lab.ravel(), minlength=nlab + 1)
+    small = sizes <= max_cells
+    small[0] = False
+    return mask | small[lab]
+
+
+def mask_thickness_cells(mask: np.ndarray) -> float:
+    """Mean thickness of a banded mask in cells: area / centre-line length.
+
+    The centre line is the Zhang-Suen skeleton; its length sums the links between 8-connected
+    skeleton cells (1 for side neighbours, sqrt 2 for diagonal ones, each link once). Returns
+    NaN for an empty mask.
+    """
+    mask = np.asarray(mask, dtype=bool)
+    if not mask.any():
+        return float("nan")
+    dist = ndimage.distance_transform_edt(mask)
+    pad = int(np.ceil(dist.max())) + 2
+    skel = _kernels.zhang_suen_thin(np.pad(mask, pad, mode="symmetric").astype(np.uint8))
+    skel = skel[pad:-pad, pad:-pad].astype(bool)
+    length = skeleton_length_cells(skel)
+    if length <= 0:
+        return float(mask.sum())
+    return float(mask.sum()) / length
+
+
+def skeleton_length_cells(skel: np.ndarray) -> float:
+    """Length (cells) of a one-cell-wide skeleton: sum of its 8-neighbour links, each once.
+
+    Side links are counted only where they do not close a diagonal short-cut (a 2x2 L of
+    three cells counts two side links, not a side and a diagonal).
+    """
+    s = np.asarray(skel, dtype=bool)
+    side = (s[:, 1:] & s[:, :-1]).sum() + (s[1:, :] & s[:-1, :]).sum()
+    # diagonals that are not bridged by a side path through a third cell
+    d1 = s[1:, 1:] & s[:-1, :-1] & ~s[:-1, 1:] & ~s[1:, :-1]
+    d2 = s[1:, :-1] & s[:-1, 1:] & ~s[:-1, :-1] & ~s[1:, 1:]
+    return float(side) + np.sqrt(2.0) * float(d1.sum() + d2.sum())
