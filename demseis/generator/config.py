@@ -31,6 +31,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from demseis.dem.types import Material
 from demseis.errors import ConfigError
 from demseis.generator.params import (
     DistSpec,
@@ -43,6 +44,8 @@ from demseis.generator.params import (
 )
 
 PRESETS = ("tiny", "quick", "seed")
+
+_MAT = Material()
 
 INF = math.inf
 
@@ -60,18 +63,18 @@ _BASE_PARAMS: tuple[ParamDef, ...] = (
     ParamDef("n_layers", int, "run", 48, 1, 250, doc="number of pre-kinematic layers"),
     ParamDef("layer_thickness_cv", float, "run", 0.0, 0.0, 0.9,
              doc="coefficient of variation of layer thicknesses (0 = equal thicknesses)"),
-    # mechanics (demseis.dem.Material)
-    ParamDef("density_kg_m3", float, "run", 2500.0, 500.0, 6000.0, doc="element density (kg/m^3)"),
-    ParamDef("kn_n_m", float, "run", 1.0e10, 1.0e6, 1.0e13, doc="normal contact stiffness Kn (N/m)"),
-    ParamDef("ks_ratio", float, "run", 0.5, 0.0, 2.0, doc="shear stiffness Ks / Kn"),
-    ParamDef("friction", float, "run", 0.4, 0.0, 2.0, doc="inter-element friction coefficient mu"),
-    ParamDef("cohesion_n", float, "run", 0.0, 0.0, 1.0e12, doc="contact cohesion C0 (N)"),
-    ParamDef("bond_strain", float, "run", 0.02, 1.0e-5, 1.0, doc="bond-breaking strain r0"),
-    ParamDef("contact_model", str, "run", "frictional", choices=("frictional", "bonded"),
+    # mechanics (demseis.dem.Material; defaults are Material's)
+    ParamDef("density_kg_m3", float, "run", _MAT.density_kg_m3, 500.0, 6000.0, doc="element density (kg/m^3)"),
+    ParamDef("kn_n_m", float, "run", _MAT.kn_n_m, 1.0e6, 1.0e13, doc="normal contact stiffness Kn (N/m)"),
+    ParamDef("ks_ratio", float, "run", _MAT.ks_ratio, 0.0, 2.0, doc="shear stiffness Ks / Kn"),
+    ParamDef("friction", float, "run", _MAT.friction, 0.0, 2.0, doc="inter-element friction coefficient mu"),
+    ParamDef("cohesion_n", float, "run", _MAT.cohesion_n, 0.0, 1.0e12, doc="contact cohesion C0 (N)"),
+    ParamDef("bond_strain", float, "run", _MAT.bond_strain, 1.0e-5, 1.0, doc="bond-breaking strain r0"),
+    ParamDef("contact_model", str, "run", _MAT.model, choices=("frictional", "bonded"),
              doc="frictional-cohesive (bonds start broken) or bonded"),
-    ParamDef("damping_scale", float, "run", 3.0e9, 0.0, 1.0e13,
+    ParamDef("damping_scale", float, "run", _MAT.damping_scale, 0.0, 1.0e13,
              doc="viscous damping eta = dt * damping_scale (N s/m per s)"),
-    ParamDef("gravity_m_s2", float, "run", 9.81, 0.0, 100.0, doc="gravity (m/s^2)"),
+    ParamDef("gravity_m_s2", float, "run", _MAT.gravity_m_s2, 0.0, 100.0, doc="gravity (m/s^2)"),
     # rendering
     ParamDef("freq_hz", float, "render", 40.0, 1.0, 500.0, doc="Ricker peak frequency (Hz)"),
     ParamDef("snr_db", float, "render", INF, -40.0, INF,
@@ -94,7 +97,11 @@ _MATERIAL_FIELDS = {
 
 
 def _property_params() -> tuple[ParamDef, ...]:
-    """Sweepable fields of :class:`demseis.seismic.PropertyModel` (run level)."""
+    """Sweepable (numeric scalar) fields of :class:`demseis.seismic.PropertyModel` (run level).
+
+    Its string and tuple fields (lithology names and Vp/density ranges, density law,
+    background rule) are set in ``[properties]``.
+    """
     from demseis.seismic import PropertyModel
 
     out = []
@@ -107,10 +114,8 @@ def _property_params() -> tuple[ParamDef, ...]:
             kind = int
         elif isinstance(value, float):
             kind = float
-        elif isinstance(value, str):
-            kind = str
         else:
-            continue  # tuples etc. are set in [properties]
+            continue  # strings and tuples are set in [properties]
         out.append(ParamDef(f.name, kind, "run", value, doc=f"PropertyModel.{f.name}"))
     return tuple(out)
 
