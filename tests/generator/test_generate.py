@@ -1,0 +1,209 @@
+"""End to end: ``demseis generate`` on the tiny preset, resume, determinism, the other commands."""
+
+from __future__ import annotations
+
+import filecmp
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import zarr
+
+from demseis.generator.cli import main
+
+
+def _tree_bytes(path: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(path)): p.read_bytes() for p in sorted(path.rglob("*")) if p.is_file()}
+
+
+def assert_same_bytes(a: Path, b: Path) -> None:
+    ta, tb = _tree_bytes(a), _tree_bytes(b)
+    assert sorted(ta) == sorted(tb), set(ta) ^ set(tb)
+    different = [k for k in ta if ta[k] != tb[k]]
+    assert not different, f"files differ: {different[:5]}"
+
+
+@pytest.fixture(scope="module")
+def tiny_store(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("gen") / "t.zarr"
+    assert main(["generate", "--preset", "tiny", "--out", str(out), "--workers", "0", "--quiet"]) == 0
+    return out
+
+
+def test_tiny_store_contents(tiny_store):
+    root = zarr.open_group(str(tiny_store), mode="r")
+    seis, fault = root["seismic"], root["fault"]
+    assert seis.dtype == np.float32 and fault.dtype == np.uint8
+    n, h, w = seis.shape
+    assert n >= 8
+    for name in ("fault", "damage", "strain", "layer"):
+        assert root[name].shape == (n, h, w)
+    s = seis[:]
+    assert not np.isnan(s).any()
+    assert np.abs(s).max() > 0
+    snap = root["params/snapshot"][:]
+    f = fault[:].reshape(n, -1).sum(axis=1)
+    assert np.all(f[snap > 0] > 0), "fault mask empty in a sample taken after faulting"
+    assert np.all(f[snap == 0] == 0), "fault mask non-empty before any faulting"
+    assert set(np.unique(root["damage"][:])) <= {0, 1, 2}
+
+
+def test_same_command_same_bytes(tiny_store, tmp_path):
+    again = tmp_path / "again.zarr"
+    assert main(["generate", "--preset", "tiny", "--out", str(again), "--workers", "0", "--quiet"]) == 0
+    assert_same_bytes(tiny_store, again)
+
+
+def test_rerun_on_complete_store_is_a_no_op(tiny_store, capsys):
+    before = _tree_bytes(tiny_store)
+    assert main(["generate", "--preset", "tiny", "--out", str(tiny_store), "--workers", "0", "--quiet"]) == 0
+    assert "2 already done, 0 written now" in capsys.readouterr().out
+    assert _tree_bytes(tiny_store) == before
+
+
+def test_different_config_refused_without_overwrite(tiny_store, tmp_path, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[sweep]\nseed = 99\n")
+    before = _tree_bytes(tiny_store)
+    code = main(["generate", str(cfg), "--preset", "tiny", "--out", str(tiny_store), "--workers", "0"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "different config" in err and "sweep.seed" in err and "--overwrite" in err
+    assert _tree_bytes(tiny_store) == before
+
+
+def test_overwrite_replaces(tiny_store, tmp_path):
+    copy = tmp_path / "copy.zarr"
+    assert main(["generate", "--preset", "tiny", "--out", str(copy), "--workers", "0", "--quiet"]) == 0
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[sweep]\nseed = 5\nn_runs = 1\n")
+    assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(copy), "--workers", "0",
+                 "--quiet", "--overwrite"]) == 0
+    root = zarr.open_group(str(copy), mode="r")
+    assert root.attrs["config"]["sweep"]["seed"] == 5
+    assert root["seismic"].shape[0] == 6
+
+
+def test_foreign_directory_refused(tmp_path, capsys):
+    foreign = tmp_path / "mine"
+    foreign.mkdir()
+    (foreign / "precious.txt").write_text("keep me")
+    code = main(["generate", "--preset", "tiny", "--out", str(foreign), "--workers", "0", "--overwrite"])
+    assert code == 2
+    assert (foreign / "precious.txt").read_text() == "keep me"
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_dry_run_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "d.zarr"
+    assert main(["generate", "--preset", "quick", "--out", str(out), "--dry-run"]) == 0
+    text = capsys.readouterr().out
+    assert "DEM runs: 4" in text and "samples: 48" in text and "estimated time" in text and "MiB" in text
+    assert not out.exists()
+
+
+def test_info(tiny_store, capsys):
+    assert main(["info", str(tiny_store)]) == 0
+    text = capsys.readouterr().out
+    assert "samples: 12 in 2 shards of 6; done shards: 2" in text
+    assert "dip_deg" in text and "45, 60" in text
+    assert main(["info", str(tiny_store.parent / "missing.zarr")]) == 2
+
+
+def test_render_reuses_particles(tiny_store, tmp_path):
+    out = tmp_path / "r.zarr"
+    assert main(["render", str(tiny_store), "--freq", "25,50", "--snr", "inf", "--out", str(out), "--quiet"]) == 0
+    src = zarr.open_group(str(tiny_store), mode="r")
+    new = zarr.open_group(str(out), mode="r")
+    n_snap = src.attrs["config"]["model"]["n_snapshots"]
+    assert new["seismic"].shape[0] == 2 * n_snap * 2
+    assert sorted(set(new["params/freq_hz"][:].tolist())) == [25.0, 50.0]
+    # the labels come from the same particles: identical to the source's, snapshot by snapshot
+    for run in (0, 1):
+        for k in range(n_snap):
+            a = src["fault"][np.flatnonzero((src["params/run_id"][:] == run) & (src["params/snapshot"][:] == k))[0]]
+            b = new["fault"][np.flatnonzero((new["params/run_id"][:] == run) & (new["params/snapshot"][:] == k))[0]]
+            np.testing.assert_array_equal(a, b)
+    assert main(["validate", str(out)]) == 0
+
+
+def test_bad_render_args(tiny_store, tmp_path, capsys):
+    assert main(["render", str(tiny_store), "--freq", "20,abc", "--out", str(tmp_path / "x")]) == 2
+    assert "'abc' is not a number" in capsys.readouterr().err
+    assert main(["render", str(tiny_store), "--freq", "900", "--out", str(tmp_path / "x")]) == 2
+    assert "sweep.freq_hz" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
+
+
+def test_dataloader_two_workers(tiny_store):
+    import torch
+    from torch.utils.data import DataLoader
+
+    from demseis.datasets import FaultSegDataset
+
+    ds = FaultSegDataset(tiny_store, inputs=("seismic",), targets=("fault",), crop=(32, 32))
+    loader = DataLoader(ds, batch_size=4, num_workers=2)
+    seen = 0
+    for x, y in loader:
+        assert x.dtype == torch.float32 and x.shape[1:] == (1, 32, 32)
+        assert y.shape[1:] == (32, 32)
+        seen += x.shape[0]
+    assert seen == len(ds) == 12
+
+
+def test_preview_writes_figures(tiny_store, tmp_path):
+    out = tmp_path / "figs"
+    assert main(["preview", str(tiny_store), "--out", str(out), "--run", "1"]) == 0
+    names = sorted(p.name for p in out.glob("*.png"))
+    assert names == ["fig2_particles.png", "fig3_particle_properties.png", "fig4_gridded.png",
+                     "fig5_section_overlay.png", "fig6_frequency.png"]
+    assert all((out / n).stat().st_size > 10_000 for n in names)
+    assert main(["preview", str(tiny_store), "--out", str(out), "--run", "7"]) == 2
+
+
+def _generate_cmd(cfg: Path, out: Path, *extra: str) -> list[str]:
+    return [sys.executable, "-m", "demseis", "generate", str(cfg), "--preset", "tiny", "--out", str(out),
+            "--quiet", *extra]
+
+
+@pytest.mark.slow
+def test_interrupted_then_resumed_is_identical(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[sweep]\nn_runs = 6\n")
+    ref = tmp_path / "ref.zarr"
+    subprocess.run(_generate_cmd(cfg, ref, "--workers", "0"), check=True, capture_output=True)
+    out = tmp_path / "int.zarr"
+    proc = subprocess.Popen(_generate_cmd(cfg, out, "--workers", "0"), stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    done = 0
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None:
+        try:
+            done = int((zarr.open_array(str(out / "shard_done"), mode="r")[:] == 1).sum())
+        except Exception:
+            done = 0
+        if done >= 1:
+            break
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    status = zarr.open_array(str(out / "shard_done"), mode="r")[:]
+    assert 1 <= int((status == 1).sum()) < 6, f"kill did not land mid-sweep: {status}"
+    assert main(["validate", str(out)]) == 0  # done shards are complete
+    subprocess.run(_generate_cmd(cfg, out, "--workers", "0"), check=True, capture_output=True)
+    assert_same_bytes(ref, out)
+
+
+@pytest.mark.slow
+def test_one_and_two_workers_identical(tiny_store, tmp_path):
+    one = tmp_path / "one.zarr"
+    two = tmp_path / "two.zarr"
+    assert main(["generate", "--preset", "tiny", "--out", str(one), "--workers", "1", "--quiet"]) == 0
+    assert main(["generate", "--preset", "tiny", "--out", str(two), "--workers", "2", "--quiet"]) == 0
+    assert_same_bytes(tiny_store, one)
+    assert_same_bytes(tiny_store, two)
