@@ -115,6 +115,7 @@ def write_segy(section: np.ndarray, out: str | Path, *, x0_m: float, cell_m: flo
     spec.samples = list(range(ns))
     spec.tracecount = nx
     xs = x0_m + (np.arange(nx) + 0.5) * cell_m
+    traces = np.ascontiguousarray(sec.T)
     tmp = out.with_name(out.name + ".tmp")
     lines = [
         "DEMSEIS SYNTHETIC SECTION (1-D CONVOLUTIONAL MODEL, ZERO-PHASE RICKER)",
@@ -151,7 +152,7 @@ def write_segy(section: np.ndarray, out: str | Path, *, x0_m: float, cell_m: flo
                     segyio.TraceField.DelayRecordingTime: first,
                     segyio.TraceField.CoordinateUnits: 1,
                 }
-                f.trace[j] = sec[:, j]
+                f.trace[j] = traces[j]
         os.replace(tmp, out)
     finally:
         if tmp.exists():
