@@ -24,9 +24,10 @@ class LabelConfig:
     Attributes
     ----------
     strain_measure : ``"total"`` (finite strain of each snapshot against the element's first
-        appearance) or ``"cumulative"`` (sum of the incremental strains between consecutive
-        snapshots; never smaller than the total in a monotonic shear zone and it remembers
-        strain that was later undone). Which one drives the masks.
+        appearance) or ``"cumulative"`` (sum of the incremental gamma_max between consecutive
+        snapshots: it keeps strain that later deformation undid or rotated away; for steady
+        simple shear it is a little below the total since gamma sqrt(1 + gamma^2/4) is convex).
+        Which one drives the masks.
     neighbour_method : ``"radius"`` (neighbours j of i with ``|X_j - X_i| <= neighbour_radius_factor
         * (r_i + r_j)`` in the reference state) or ``"knn"`` (the ``neighbour_k`` nearest centres).
     neighbour_radius_factor : multiple of the summed radii, in (0.5, 5]. 1.0 catches touching
