@@ -46,8 +46,8 @@ class LabelConfig:
         within t/2 of the skeleton).
     centreline_window_cells : with ``thickness_cells >= 1``: the skeleton's branches are
         moving-averaged over this many cells along their length (removes the element-scale
-        stepping of the band edges; ~4 element diameters at 10 m cells) and spurs up to half
-        this length are pruned, in [1, 201]; 1 = raw skeleton.
+        stepping of the band edges; ~4 element diameters at 10 m cells) and side branches
+        (end point to junction) up to this length are pruned, in [1, 201]; 1 = raw skeleton.
     """
 
     strain_measure: str = "cumulative"
@@ -56,7 +56,7 @@ class LabelConfig:
     neighbour_k: int = 10
     min_neighbours: int = 3
     fault_threshold: float = 0.5
-    damage_threshold: float = 0.15
+    damage_threshold: float = 0.3
     min_component_cells: int = 30
     smooth_sigma_cells: float = 1.0
     thickness_cells: float = 1.0

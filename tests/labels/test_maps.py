@@ -106,7 +106,7 @@ def test_damage_classes_nest(pack_fault):
     cur = kinematic_fault(xy, x_m=XF, dip_deg=50.0, slip_m=60.0, zone_width_m=300.0)
     cur = kinematic_fault(cur, x_m=XF, dip_deg=50.0, slip_m=80.0)
     g = element_strain(xy, cur, r).gamma_max
-    cfg = LabelConfig(thickness_cells=0.0)
+    cfg = LabelConfig(thickness_cells=0.0, damage_threshold=0.15)
     maps = label_maps(snap_of(cur, r), g, grid, cfg)
     dmg, flt = maps["damage"], maps["fault"]
     assert dmg.dtype == np.uint8 and flt.dtype == np.uint8
