@@ -103,11 +103,23 @@ def fill_value_for(dtype: np.dtype) -> Any:
     raise InputError(f"dtype {dtype} is not supported in a demseis store (use int, uint or float)")
 
 
-def _sample_compressor(dtype: np.dtype):
+UNCOMPRESSED_ARRAYS: tuple[str, ...] = ("seismic", "impedance")
+"""Sample arrays stored without compression: network inputs, read as zero-copy crops.
+
+Band-limited float sections compress to only ~80-90 % with lz4/zstd, and decoding costs more
+than the read (measured: 0.47 ms vs 0.90 ms per 320x512 sample). Labels and strain compress
+many-fold and are stored with Blosc-lz4.
+"""
+
+
+def _sample_compressor(name: str, dtype: np.dtype):
     from zarr.codecs import BloscCodec
 
-    # lz4 decodes at several GB/s: reading stays cheap next to the PyTorch side.
-    shuffle = "shuffle" if dtype.itemsize > 1 else "bitshuffle"
+    if name in UNCOMPRESSED_ARRAYS:
+        return None
+    # lz4 decodes at GB/s; labels compress ~200-fold (measured 0.005 of raw for fault masks,
+    # 0.02 ms decode per 320x512 sample; bit-shuffle was 5x slower to decode for no gain).
+    shuffle = "shuffle" if dtype.itemsize > 1 else "noshuffle"
     return BloscCodec(cname="lz4", clevel=5, shuffle=shuffle)
 
 
@@ -459,7 +471,7 @@ def create_store(
             chunks=(1, h, w),
             shards=(s, h, w),
             fill_value=fill_value_for(dtype),
-            compressors=_sample_compressor(dtype),
+            compressors=_sample_compressor(name, dtype),
             dimension_names=("sample", "z", "x"),
         )
     pgroup = group.create_group("params")

@@ -24,9 +24,10 @@ class LabelConfig:
     Attributes
     ----------
     strain_measure : ``"total"`` (finite strain of each snapshot against the element's first
-        appearance) or ``"cumulative"`` (sum of the incremental strains between consecutive
-        snapshots; never smaller than the total in a monotonic shear zone and it remembers
-        strain that was later undone). Which one drives the masks.
+        appearance) or ``"cumulative"`` (sum of the incremental gamma_max between consecutive
+        snapshots: it keeps strain that later deformation undid or rotated away; for steady
+        simple shear it is a little below the total since gamma sqrt(1 + gamma^2/4) is convex).
+        Which one drives the masks.
     neighbour_method : ``"radius"`` (neighbours j of i with ``|X_j - X_i| <= neighbour_radius_factor
         * (r_i + r_j)`` in the reference state) or ``"knn"`` (the ``neighbour_k`` nearest centres).
     neighbour_radius_factor : multiple of the summed radii, in (0.5, 5]. 1.0 catches touching
@@ -45,8 +46,8 @@ class LabelConfig:
         within t/2 of the skeleton).
     centreline_window_cells : with ``thickness_cells >= 1``: the skeleton's branches are
         moving-averaged over this many cells along their length (removes the element-scale
-        stepping of the band edges; ~4 element diameters at 10 m cells) and spurs up to half
-        this length are pruned, in [1, 201]; 1 = raw skeleton.
+        stepping of the band edges; ~4 element diameters at 10 m cells) and side branches
+        (end point to junction) up to this length are pruned, in [1, 201]; 1 = raw skeleton.
     """
 
     strain_measure: str = "cumulative"
@@ -55,7 +56,7 @@ class LabelConfig:
     neighbour_k: int = 10
     min_neighbours: int = 3
     fault_threshold: float = 0.5
-    damage_threshold: float = 0.15
+    damage_threshold: float = 0.3
     min_component_cells: int = 30
     smooth_sigma_cells: float = 1.0
     thickness_cells: float = 1.0

@@ -145,7 +145,7 @@ def fault_mask(strain: np.ndarray, config: LabelConfig | None = None,
     mask = remove_small_components(mask, cfg.min_component_cells)
     if cfg.thickness_cells > 0:
         mask = thin_and_dilate(mask, cfg.thickness_cells, cfg.centreline_window_cells,
-                               cfg.centreline_window_cells // 2)
+                               cfg.centreline_window_cells)
         if rock is not None:
             mask &= rock
     return mask.astype(np.uint8)
@@ -208,7 +208,7 @@ def thin_and_dilate(mask: np.ndarray, thickness_cells: float, window_cells: int 
     removed; branch coordinates moving-averaged over ``window_cells`` cells along the branch
     (see :mod:`demseis.labels.centreline`); band of cells whose centre lies within
     ``thickness_cells / 2`` of the centre line (``thickness_cells <= 1``: the line itself).
-    The mask is mirrored by a margin first so that bands leaving through the grid edge keep
+    The mask is extended by edge replication first so that bands leaving through the grid edge keep
     their centre line up to the edge (thinning would otherwise shorten them by half a width).
 
     Parameters
@@ -230,7 +230,7 @@ def thin_and_dilate(mask: np.ndarray, thickness_cells: float, window_cells: int 
     # the margin must exceed the half-width of the widest band reaching the edge
     dist = ndimage.distance_transform_edt(mask)
     pad = int(np.ceil(dist.max())) + 2 + int(window_cells) // 2
-    padded = np.pad(mask, pad, mode="symmetric")
+    padded = np.pad(mask, pad, mode="edge")
     # holes enclosed by the band (a low-strain grain inside a shear band) would become loops of
     # the skeleton; fill those up to window_cells^2 / 2 cells
     padded = fill_small_holes(padded, max(int(window_cells) ** 2 // 2, 8))
@@ -270,7 +270,7 @@ def mask_thickness_cells(mask: np.ndarray) -> float:
         return float("nan")
     dist = ndimage.distance_transform_edt(mask)
     pad = int(np.ceil(dist.max())) + 2
-    skel = _kernels.zhang_suen_thin(np.pad(mask, pad, mode="symmetric").astype(np.uint8))
+    skel = _kernels.zhang_suen_thin(np.pad(mask, pad, mode="edge").astype(np.uint8))
     skel = skel[pad:-pad, pad:-pad].astype(bool)
     length = skeleton_length_cells(skel)
     if length <= 0:

@@ -247,3 +247,43 @@ def containing_cell(t_bottom, t_s, out):
             while j < nz and t_bottom[c, j] <= t:
                 j += 1
             out[c, q] = j if j < nz else -1
+
+
+@njit(cache=True)
+def nearest_element(x, y, x0, top, cell, nz, nx, search_m, want, out_d2, out_index):
+    """Nearest element centre of every wanted cell, among elements within ``search_m``.
+
+    Parameters
+    ----------
+    x, y : (n,) float64 element centres (m), y up.
+    x0, top, cell, nz, nx : the grid (left edge, top elevation, cell size in m, rows, columns).
+    search_m : search radius (m); cells with no element centre that close keep index -1.
+    want : (nz, nx) bool, cells to process (e.g. the empty ones).
+    out_d2 : (nz, nx) float64, set to +inf by the caller; squared distance (m^2) to the nearest.
+    out_index : (nz, nx) int64, set to -1 by the caller; index of the nearest element.
+
+    Ties keep the lower element index, so the result is the same as a brute-force search.
+    """
+    n = x.shape[0]
+    s2 = search_m * search_m
+    for e in range(n):
+        fj0 = np.ceil((x[e] - search_m - x0) / cell - 0.5) - 1.0
+        fj1 = np.floor((x[e] + search_m - x0) / cell - 0.5) + 1.0
+        fi0 = np.ceil((top - (y[e] + search_m)) / cell - 0.5) - 1.0
+        fi1 = np.floor((top - (y[e] - search_m)) / cell - 0.5) + 1.0
+        if fj1 < 0.0 or fi1 < 0.0 or fj0 > nx - 1.0 or fi0 > nz - 1.0:
+            continue
+        j0 = max(int(fj0), 0)
+        j1 = min(int(fj1), nx - 1)
+        i0 = max(int(fi0), 0)
+        i1 = min(int(fi1), nz - 1)
+        for i in range(i0, i1 + 1):
+            dy = top - (i + 0.5) * cell - y[e]
+            for j in range(j0, j1 + 1):
+                if not want[i, j]:
+                    continue
+                dx = x0 + (j + 0.5) * cell - x[e]
+                d2 = dx * dx + dy * dy
+                if d2 <= s2 and d2 < out_d2[i, j]:
+                    out_d2[i, j] = d2
+                    out_index[i, j] = e

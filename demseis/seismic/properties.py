@@ -296,6 +296,33 @@ def smooth(field: np.ndarray, model: PropertyModel) -> np.ndarray:
     return a
 
 
+def nearest_element_index(xy: np.ndarray, grid: Grid, want: np.ndarray,
+                          search_m: float | None = None) -> np.ndarray:
+    """Index of the element whose centre is nearest to each wanted cell centre (-1 elsewhere).
+
+    A Numba pass finds it among the elements within ``search_m`` (default 4 cells, at least
+    50 m) of each cell; the few wanted cells with no element that close (e.g. above the
+    surface) are resolved with a k-d tree over all centres. Exact either way.
+    """
+    xy = np.asarray(xy, dtype=np.float64)
+    search = max(4.0 * grid.cell_m, 50.0) if search_m is None else float(search_m)
+    d2 = np.full(grid.shape, np.inf)
+    idx = np.full(grid.shape, -1, dtype=np.int64)
+    want = np.ascontiguousarray(want, dtype=np.bool_)
+    _kernels.nearest_element(np.ascontiguousarray(xy[:, 0]), np.ascontiguousarray(xy[:, 1]),
+                             float(grid.x0_m), float(grid.top_m), float(grid.cell_m), grid.nz,
+                             grid.nx, search, want, d2, idx)
+    missing = want & (idx < 0)
+    if missing.any():
+        from scipy.spatial import cKDTree
+
+        ii, jj = np.nonzero(missing)
+        centres = np.column_stack([grid.x_centres()[jj], grid.y_centres()[ii]])
+        _, nearest = cKDTree(xy).query(centres)
+        idx[ii, jj] = nearest
+    return idx
+
+
 def fill_background(mean: np.ndarray, count: np.ndarray, xy: np.ndarray, values: np.ndarray,
                     layer: np.ndarray, grid: Grid, mode: str) -> np.ndarray:
     """Fill the empty cells (``count == 0``) of rasterised ``mean`` (nz, nx, k) in place.
@@ -309,17 +336,13 @@ def fill_background(mean: np.ndarray, count: np.ndarray, xy: np.ndarray, values:
     if mode == "global":
         mean[empty] = values.mean(axis=0)
         return mean
-    from scipy.spatial import cKDTree
-
     n_layers = int(layer.max()) + 1
     counts = np.bincount(layer, minlength=n_layers).astype(np.float64)
     layer_mean = np.stack([np.bincount(layer, weights=values[:, c], minlength=n_layers)
                            for c in range(values.shape[1])], axis=1)
     layer_mean /= np.maximum(counts, 1.0)[:, None]
-    ii, jj = np.nonzero(empty)
-    centres = np.column_stack([grid.x_centres()[jj], grid.y_centres()[ii]])
-    _, nearest = cKDTree(xy).query(centres)
-    mean[ii, jj] = layer_mean[layer[nearest]]
+    nearest = nearest_element_index(xy, grid, empty)
+    mean[empty] = layer_mean[layer[nearest[empty]]]
     return mean
 
 

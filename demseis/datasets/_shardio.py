@@ -1,0 +1,144 @@
+"""Direct crop reads from Zarr v3 shard files (the reading fast path).
+
+A sharded array (codec chain ``sharding_indexed`` with inner codecs ``[bytes]`` or
+``[bytes, blosc]``) stores each (1, H, W) chunk at a byte range of its shard file; the shard
+index at the end of the file (Zarr v3 sharding spec: ``n_chunks`` pairs of little-endian uint64
+``(offset, nbytes)``, then the crc32c of the index) says where. Memory-mapping the shard file:
+
+- uncompressed chunks are viewed in place as (H, W) arrays, so a crop copies only its window,
+  which is what a NumPy memmap of the data would do;
+- Blosc chunks are decoded with numcodecs (the library zarr itself calls), then cropped.
+
+This skips zarr-python's asyncio machinery, which costs ~0.5 ms per sample on small reads
+(measured: 18 ms for a 32-sample uint8 slice whose Blosc decoding takes 0.7 ms). Arrays with
+any other codec chain are read through zarr. The result is identical to zarr's (tested).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from demseis.errors import StoreError
+
+_EMPTY = np.uint64(2**64 - 1)
+
+
+def raw_shard_layout(array) -> tuple[int, tuple[int, int], np.dtype, str | None] | None:
+    """(samples per shard, (H, W), dtype, "blosc" or None) if ``array`` can be read raw.
+
+    Raw reading needs: 3-D array, chunks (1, H, W), one ``sharding_indexed`` codec whose inner
+    codecs are little-endian ``bytes`` optionally followed by ``blosc``, index codecs
+    ``bytes`` + ``crc32c``, index at the end, and the default ``/`` chunk key encoding.
+    Returns None otherwise.
+    """
+    meta = array.metadata.to_dict()
+    codecs = meta.get("codecs", ())
+    if len(meta.get("shape", ())) != 3 or len(codecs) != 1:
+        return None
+    c = codecs[0]
+    if c.get("name") != "sharding_indexed":
+        return None
+    conf = c.get("configuration", {})
+    inner = [d.get("name") for d in conf.get("codecs", ())]
+    index = [d.get("name") for d in conf.get("index_codecs", ())]
+    endian = [d.get("configuration", {}).get("endian", "little") for d in conf.get("codecs", ())]
+    cke = meta.get("chunk_key_encoding", {})
+    chunk = tuple(conf.get("chunk_shape", ()))
+    shape = tuple(meta["shape"])
+    compressor = None
+    if inner == ["bytes", "blosc"]:
+        compressor, inner = "blosc", ["bytes"]
+        endian = endian[:1]
+    if (
+        inner != ["bytes"]
+        or endian != ["little"]
+        or index != ["bytes", "crc32c"]
+        or conf.get("index_location", "end") != "end"
+        or cke.get("name") != "default"
+        or cke.get("configuration", {}).get("separator", "/") != "/"
+        or len(chunk) != 3
+        or chunk[0] != 1
+        or chunk[1:] != shape[1:]
+    ):
+        return None
+    shards = meta["chunk_grid"]["configuration"]["chunk_shape"]
+    dtype = np.dtype(array.dtype).newbyteorder("<")
+    return int(shards[0]), (int(shape[1]), int(shape[2])), dtype, compressor
+
+
+class RawShardReader:
+    """Crop windows out of the shards of one array, via ``np.memmap``.
+
+    Parameters
+    ----------
+    array_dir : directory of the array inside the store (``STORE/seismic``).
+    samples_per_shard : S.
+    shape : (H, W).
+    dtype : little-endian dtype of the values.
+    fill_value : value of never-written chunks.
+    compressor : None (raw values) or ``"blosc"``.
+    """
+
+    def __init__(self, array_dir: str | Path, samples_per_shard: int, shape: tuple[int, int],
+                 dtype: np.dtype, fill_value, compressor: str | None = None) -> None:
+        if compressor not in (None, "blosc"):
+            raise ValueError(f"compressor must be None or 'blosc', got {compressor!r}")
+        self.compressor = compressor
+        self.array_dir = Path(array_dir)
+        self.s = int(samples_per_shard)
+        self.shape = shape
+        self.dtype = np.dtype(dtype)
+        self.fill_value = fill_value
+        self.chunk_nbytes = shape[0] * shape[1] * self.dtype.itemsize
+        self._open: dict[int, tuple[np.memmap, np.ndarray]] = {}
+
+    def _shard(self, shard: int) -> tuple[np.memmap, np.ndarray]:
+        got = self._open.get(shard)
+        if got is not None:
+            return got
+        import google_crc32c
+
+        path = self.array_dir / "c" / str(shard) / "0" / "0"
+        if not path.is_file():
+            raise StoreError(f"shard file {str(path)!r} is missing")
+        mm = np.memmap(path, dtype=np.uint8, mode="r")
+        index_nbytes = self.s * 16
+        if mm.shape[0] < index_nbytes + 4:
+            raise StoreError(f"shard file {str(path)!r} is truncated")
+        raw_index = np.asarray(mm[-(index_nbytes + 4):-4])
+        crc = int(np.frombuffer(np.asarray(mm[-4:]).tobytes(), dtype="<u4")[0])
+        if google_crc32c.value(raw_index.tobytes()) != crc:
+            raise StoreError(f"shard file {str(path)!r} has a corrupt index (crc32c mismatch)")
+        index = raw_index.view("<u8").reshape(self.s, 2)
+        ok = index[:, 0] != _EMPTY
+        if (self.compressor is None and (ok & (index[:, 1] != self.chunk_nbytes)).any()) or (
+            ok & (index[:, 0] + index[:, 1] > mm.shape[0] - index_nbytes - 4)
+        ).any():
+            raise StoreError(f"shard file {str(path)!r} has chunk ranges that do not fit")
+        if len(self._open) >= 64:  # bound open maps per process
+            self._open.pop(next(iter(self._open)))
+        self._open[shard] = (mm, index)
+        return mm, index
+
+    def window(self, sample: int, rows: slice, cols: slice) -> np.ndarray:
+        """Copy of ``array[sample, rows, cols]`` (a new C-contiguous array)."""
+        shard, local = divmod(int(sample), self.s)
+        mm, index = self._shard(shard)
+        off = index[local, 0]
+        if off == _EMPTY:
+            h = len(range(*rows.indices(self.shape[0])))
+            w = len(range(*cols.indices(self.shape[1])))
+            return np.full((h, w), self.fill_value, dtype=self.dtype.newbyteorder("="))
+        if self.compressor == "blosc":
+            from numcodecs import blosc
+
+            raw = blosc.decompress(mm[int(off): int(off + index[local, 1])])
+            if len(raw) != self.chunk_nbytes:
+                raise StoreError(f"chunk {sample} of {str(self.array_dir)!r} decodes to "
+                                 f"{len(raw)} bytes, expected {self.chunk_nbytes}")
+            view = np.frombuffer(raw, dtype=self.dtype).reshape(self.shape)
+        else:
+            view = np.ndarray(self.shape, dtype=self.dtype, buffer=mm, offset=int(off))
+        return np.array(view[rows, cols], dtype=self.dtype.newbyteorder("="), order="C")

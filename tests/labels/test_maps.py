@@ -1,0 +1,219 @@
+"""label_maps: kinematic planar fault, thickness control, damage classes, layer and strain maps."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import ndimage
+from scipy.spatial import cKDTree
+
+from demseis.dem.types import Snapshot
+from demseis.errors import ConfigError, InputError
+from demseis.labels import (
+    LabelConfig,
+    element_strain,
+    label_maps,
+    mask_thickness_cells,
+    rasterise_strain,
+    strain_history,
+    thin_and_dilate,
+)
+from demseis.labels._kernels import zhang_suen_thin
+from demseis.labels.synthetic import fault_signed_distance, kinematic_fault
+from demseis.seismic.grid import Grid
+from demseis.seismic.raster import rasterise
+
+W, H, XF = 2000.0, 1000.0, 1200.0
+
+
+def snap_of(xy, r, layer=None, index=1):
+    n = xy.shape[0]
+    return Snapshot(index, index, 0.0, np.arange(n, dtype=np.int64), xy, r,
+                    np.zeros(n, np.int16) if layer is None else layer, np.zeros(n, bool))
+
+
+def line_metrics(fault, grid, dip, slip, tol_cells=2.0):
+    """(fraction of mask cells within tol of the line, fraction of the line covered).
+
+    Only the part of the section where both walls are present is scored: below the hanging
+    wall's lowered top (H - slip sin(dip)); above it the footwall's free scarp is not the line.
+    A point of the line is covered when a mask cell lies within tol_cells of it.
+    """
+    top = H - slip * np.sin(np.radians(dip)) - 2 * grid.cell_m
+    zz, xx = np.meshgrid(grid.y_centres(), grid.x_centres(), indexing="ij")
+    f = fault.astype(bool) & (zz < top)
+    pts = np.column_stack([xx[f], zz[f]])
+    assert pts.shape[0] > 0
+    d = np.abs(fault_signed_distance(pts, XF, dip)) / grid.cell_m
+    th = np.radians(dip)
+    s = np.linspace(0.0, H / np.sin(th), 4000)
+    lp = np.column_stack([XF - s * np.cos(th), s * np.sin(th)])
+    lp = lp[(lp[:, 0] > 0) & (lp[:, 1] < top)]
+    dd, _ = cKDTree(pts).query(lp)
+    return float((d <= tol_cells).mean()), float((dd <= tol_cells * grid.cell_m).mean())
+
+
+@pytest.mark.parametrize("dip", [45.0, 60.0])
+def test_kinematic_fault_mask_lies_on_the_line(pack_fault, dip):
+    grid = Grid.covering(W, H, 10.0)
+    for xy, r in pack_fault:
+        slip = 150.0
+        cur = kinematic_fault(xy, x_m=XF, dip_deg=dip, slip_m=slip)
+        res = element_strain(xy, cur, r)
+        maps = label_maps(snap_of(cur, r), res.gamma_max, grid, LabelConfig())
+        on_line, covered = line_metrics(maps["fault"], grid, dip, slip)
+        assert on_line >= 0.9, (dip, on_line)
+        assert covered >= 0.9, (dip, covered)
+        # no fault far from the line
+        zz, xx = np.meshgrid(grid.y_centres(), grid.x_centres(), indexing="ij")
+        f = maps["fault"].astype(bool)
+        d = np.abs(fault_signed_distance(np.column_stack([xx[f], zz[f]]), XF, dip))
+        assert d.max() < 120.0
+
+
+def test_thickness_control_is_monotonic_and_near_target(pack_fault):
+    xy, r = pack_fault[0]
+    grid = Grid.covering(W, H, 10.0)
+    cur = kinematic_fault(xy, x_m=XF, dip_deg=60.0, slip_m=150.0)
+    g = element_strain(xy, cur, r).gamma_max
+    measured = []
+    for t in (1.0, 3.0, 5.0, 7.0):
+        m = label_maps(snap_of(cur, r), g, grid, LabelConfig(thickness_cells=t))["fault"]
+        measured.append(mask_thickness_cells(m))
+    assert np.all(np.diff(measured) > 0.5), measured
+    for t, got in zip((3.0, 5.0, 7.0), measured[1:]):
+        assert abs(got / t - 1) < 0.25, (t, got)
+    raw = label_maps(snap_of(cur, r), g, grid, LabelConfig(thickness_cells=0.0))["fault"]
+    assert mask_thickness_cells(raw) > measured[1]  # thresholded band is wider than 3 cells
+
+
+def test_thickness_measure_on_drawn_bands():
+    # a band of cells within w/2 of a straight line has thickness ~w whatever the angle
+    zz, xx = np.mgrid[0:200, 0:300].astype(float)
+    for ang in (0.0, 30.0, 45.0, 80.0):
+        a = np.radians(ang)
+        d = np.abs((xx - 150) * np.sin(a) - (zz - 100) * np.cos(a))
+        inside = (np.abs((xx - 150) * np.cos(a) + (zz - 100) * np.sin(a)) < 80)
+        for w in (3.0, 5.0, 9.0):
+            band = (d <= w / 2) & inside
+            # area / length; the 45-degree band of w = 3 holds 5 diagonals (3.54 cells)
+            assert mask_thickness_cells(band) == pytest.approx(w, rel=0.25)
+
+
+def test_damage_classes_nest(pack_fault):
+    xy, r = pack_fault[0]
+    grid = Grid.covering(W, H, 10.0)
+    cur = kinematic_fault(xy, x_m=XF, dip_deg=50.0, slip_m=60.0, zone_width_m=300.0)
+    cur = kinematic_fault(cur, x_m=XF, dip_deg=50.0, slip_m=80.0)
+    g = element_strain(xy, cur, r).gamma_max
+    cfg = LabelConfig(thickness_cells=0.0, damage_threshold=0.15)
+    maps = label_maps(snap_of(cur, r), g, grid, cfg)
+    dmg, flt = maps["damage"], maps["fault"]
+    assert dmg.dtype == np.uint8 and flt.dtype == np.uint8
+    assert set(np.unique(dmg)) == {0, 1, 2}
+    assert np.array_equal(dmg == 2, flt == 1)
+    # the damage zone (shear zone gamma = 0.2 > damage_threshold) is wider than the core
+    assert (dmg == 1).sum() > (dmg == 2).sum()
+    lower = label_maps(snap_of(cur, r), g, grid,
+                       LabelConfig(thickness_cells=0.0, damage_threshold=0.05))["damage"]
+    assert ((lower >= 1).sum() >= (dmg >= 1).sum())
+
+
+def test_strain_target_and_layer_map(pack_small):
+    xy, r = pack_small
+    # layers: 5 bands of 100 m by centre height; grid taller than the pack (air on top)
+    layer = np.minimum(xy[:, 1] // 100, 4).astype(np.int16)
+    grid = Grid(x0_m=0.0, top_m=600.0, cell_m=10.0, nz=60, nx=80)
+    g = np.abs(np.sin(xy[:, 0] / 97.0))
+    maps = label_maps(snap_of(xy, r, layer), g, grid, LabelConfig())
+    st, lay = maps["strain"], maps["layer"]
+    assert st.dtype == np.float32 and lay.dtype == np.int16 and st.shape == grid.shape
+    assert np.all(np.isfinite(st))
+    mean, count = rasterise(xy, r, g, grid)
+    cov = count > 0
+    np.testing.assert_allclose(st[cov], mean[cov].astype(np.float32))
+    # air above the pack: layer -1, strain 0
+    assert np.all(lay[:5] == -1) and np.all(st[:5] == 0)
+    # inside: the cell's band, except within an element radius of a band boundary
+    yc = grid.y_centres()[:, None] * np.ones((1, grid.nx))
+    band = np.minimum(yc // 100, 4)
+    rock = lay >= 0
+    far = rock & (np.abs(yc - np.round(yc / 100) * 100) > 26) & (yc < 470)
+    assert (lay[far] == band[far]).mean() > 0.97
+
+
+def test_rasterise_fills_gaps_and_ignores_nan(pack_small):
+    xy, r = pack_small
+    grid = Grid.covering(800.0, 500.0, 10.0)
+    v = np.full(xy.shape[0], 2.0)
+    v[::7] = np.nan
+    field, owner = rasterise_strain(xy, r, v, grid)
+    rock = owner >= 0
+    assert rock.mean() > 0.95
+    np.testing.assert_allclose(field[rock], 2.0)
+    assert np.all(field[~rock] == 0.0)
+
+
+def test_label_maps_accepts_strain_state_and_is_deterministic(pack_small):
+    xy, r = pack_small
+    cur = kinematic_fault(xy, x_m=500.0, dip_deg=60.0, slip_m=80.0)
+    snaps = [snap_of(xy, r, index=0), snap_of(cur, r, index=1)]
+    hist = strain_history(snaps)
+    grid = Grid.covering(800.0, 500.0, 10.0)
+    a = label_maps(snaps[1], hist[1], grid, LabelConfig(strain_measure="total"))
+    b = label_maps(snaps[1], hist[1].total, grid, LabelConfig())
+    c = label_maps(snaps[1], hist[1].total, grid, LabelConfig())
+    for key in ("fault", "damage", "strain", "layer"):
+        assert np.array_equal(a[key], b[key]) and a[key].tobytes() == c[key].tobytes()
+    assert a["fault"].sum() > 0
+    with pytest.raises(InputError, match="strain_per_element"):
+        label_maps(snaps[1], hist[1].total[:-1], grid)
+
+
+def test_zhang_suen_skeleton_properties_and_skimage_agreement():
+    from skimage.morphology import skeletonize
+
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        img = ndimage.gaussian_filter(rng.random((80, 120)), 3) > 0.5
+        sk = zhang_suen_thin(img.astype(np.uint8)).astype(bool)
+        assert not (sk & ~img).any()
+        # one cell wide: full 2x2 blocks (a known Zhang-Suen leftover) are rare
+        blocks = (sk[1:, 1:] & sk[:-1, :-1] & sk[1:, :-1] & sk[:-1, 1:]).sum()
+        assert blocks <= 0.01 * sk.sum()
+        # topology: same 8-connected components (each object keeps a skeleton)
+        lab, n = ndimage.label(img, structure=np.ones((3, 3)))
+        assert len(np.unique(lab[sk])) == n
+        # close to scikit-image's skeleton (both Zhang-Suen family)
+        ref = skeletonize(img)
+        d_ref = ndimage.distance_transform_edt(~ref)
+        assert np.percentile(d_ref[sk], 95) <= 1.5
+
+
+def test_thin_and_dilate_reaches_grid_edge():
+    # a vertical band 9 cells wide crossing the whole grid: the centre line reaches both edges
+    m = np.zeros((60, 40), bool)
+    m[:, 16:25] = True
+    line = thin_and_dilate(m, 1.0)
+    assert line[0].any() and line[-1].any()
+    assert np.all(np.nonzero(line)[1] == 20)
+
+
+@pytest.mark.parametrize(
+    "field,value",
+    [("strain_measure", "max"), ("neighbour_method", "delaunay"),
+     ("neighbour_radius_factor", 0.0), ("neighbour_k", 2), ("min_neighbours", 1),
+     ("fault_threshold", -1.0), ("damage_threshold", 5.0), ("min_component_cells", -3),
+     ("smooth_sigma_cells", 50.0), ("thickness_cells", 60.0), ("centreline_window_cells", 0),
+     ("neighbour_k", 2.5), ("fault_threshold", float("nan"))],
+)
+def test_config_validation_names_field(field, value):
+    with pytest.raises(ConfigError, match=field):
+        LabelConfig(**{field: value}).validate()
+
+
+def test_config_from_mapping():
+    assert LabelConfig.from_mapping({"fault_threshold": 1.0}).fault_threshold == 1.0
+    with pytest.raises(ConfigError, match="unknown key"):
+        LabelConfig.from_mapping({"treshold": 1.0})
+    LabelConfig().validate()
