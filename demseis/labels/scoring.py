@@ -661,9 +661,10 @@ def group_rows(counts: SampleCounts, params: dict[str, NDArray[Any]], by: list[s
                bins: int = 4, zero_division: float = 0.0) -> list[dict[str, Any]]:
     """Scores per group of a sample parameter.
 
-    A parameter with at most :data:`MAX_CATEGORIES` distinct values (frequency, SNR) is grouped
-    by value (``inf`` sorts last); one with more (dip, throw) is split into ``bins`` equal-width
-    bins over its finite range, labelled ``[lo, hi)`` (the last bin closed).
+    A parameter with at most :data:`MAX_CATEGORIES` distinct values, each held by two samples
+    or more on average (frequency, SNR: swept values), is grouped by value (``inf`` sorts last);
+    any other (dip, throw: drawn per run) is split into ``bins`` equal-width bins over its finite
+    range, labelled ``[lo, hi)`` (the last bin closed); non-finite values form their own group.
 
     Parameters
     ----------
@@ -689,7 +690,7 @@ def group_rows(counts: SampleCounts, params: dict[str, NDArray[Any]], by: list[s
                              f"{sorted(params)}")
         v = np.asarray(params[name], dtype=np.float64)
         uniq = np.unique(v)  # NaN last, inf before NaN
-        if uniq.size <= MAX_CATEGORIES:
+        if uniq.size <= MAX_CATEGORIES and 2 * uniq.size <= v.size:
             for u in uniq:
                 mask = np.isnan(v) if np.isnan(u) else (v == u)
                 rows.append(_row(name, _fmt_value(u), float(u), float(u), counts.take(mask),
