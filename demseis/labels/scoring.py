@@ -474,11 +474,11 @@ class TruthStore:
         return tuple(int(s) for s in self.fault.shape)  # type: ignore[return-value]
 
 
-def _open_truth_store(path: str) -> TruthStore:
-    """Open a demseis store read-only for scoring; :class:`StoreError` naming what is wrong.
+def _open_group(path: str) -> Any:
+    """The store's root group, opened read-only and checked to be a demseis store.
 
-    Stand-in until ``demseis.datasets.open_store`` is available: checks the ``demseis`` root
-    attribute, the ``fault`` label array, ``params/`` and ``shard_done``.
+    Uses :func:`demseis.datasets.open_store` when that is available (it also checks the schema
+    version); otherwise a minimal check of the ``demseis`` root attribute.
     """
     import os
 
@@ -486,6 +486,12 @@ def _open_truth_store(path: str) -> TruthStore:
 
     from demseis.errors import StoreError
 
+    try:
+        from demseis.datasets import open_store
+    except ImportError:
+        open_store = None
+    if open_store is not None:
+        return open_store(path, "r")
     if not os.path.exists(path):
         raise StoreError(f"truth store {path!r} does not exist")
     try:
@@ -494,6 +500,18 @@ def _open_truth_store(path: str) -> TruthStore:
         raise StoreError(f"{path!r} is not a Zarr group ({type(exc).__name__}: {exc})") from exc
     if "demseis" not in root.attrs:
         raise StoreError(f"{path!r} is not a demseis store (no 'demseis' root attribute)")
+    return root
+
+
+def _open_truth_store(path: str) -> TruthStore:
+    """Open a demseis store read-only for scoring; :class:`StoreError` naming what is wrong.
+
+    Checks the ``fault`` label array, ``params/`` and ``shard_done`` (only samples of
+    completed shards are scored).
+    """
+    from demseis.errors import StoreError
+
+    root = _open_group(path)
     names = set(root.array_keys())
     if "fault" not in names:
         raise StoreError(f"store {path!r} has no 'fault' label array; it holds "
@@ -654,7 +672,7 @@ def score_store_counts(pred: Any, store: TruthStore, *, indices: ArrayLike | Non
 def _fmt_value(v: float) -> str:
     if np.isinf(v):
         return "inf" if v > 0 else "-inf"
-    return f"{v:g}"
+    return f"{v:.6g}"
 
 
 def group_rows(counts: SampleCounts, params: dict[str, NDArray[Any]], by: list[str], *,
