@@ -125,7 +125,7 @@ def train(args: argparse.Namespace) -> tuple[object, dict]:
             opt.zero_grad()
             loss.backward()
             opt.step()
-            losses.append(float(loss))
+            losses.append(float(loss.detach()))
             step += 1
             if step % 20 == 0:
                 print(f"  step {step:5d}  epoch {epoch:3d}  loss {np.mean(losses[-20:]):.4f}  "
