@@ -37,36 +37,48 @@ def dip_scan_semblance(section, slopes, half_traces, half_samples, eps):
         max_p c(p) at every pixel.
     """
     nz, nx = section.shape
-    out = np.empty((nz, nx), np.float32)
-    for iz in range(nz):
+    # The window sum over dz of row terms separates: row z' = iz + dz of the window only depends
+    # on z' (and the slope), so row terms are computed once per (slope, z', ix) and summed with
+    # a running window, O(n_slopes nz nx (2 half_traces + 1)) instead of that times the height.
+    nrow = nz + 2 * half_samples
+    best = np.zeros((nz, nx))
+    num_row = np.empty(nrow)
+    den_row = np.empty(nrow)
+    for k in range(slopes.shape[0]):
+        p = slopes[k]
         for ix in range(nx):
-            best = 0.0
-            for k in range(slopes.shape[0]):
-                p = slopes[k]
-                num = 0.0
-                den = 0.0
-                for dz in range(-half_samples, half_samples + 1):
-                    s = 0.0
-                    e = 0.0
-                    m = 0
-                    for dx in range(-half_traces, half_traces + 1):
-                        jx = ix + dx
-                        if jx < 0 or jx >= nx:
-                            continue
-                        z = iz + dz + p * dx
-                        if z < 0.0 or z > nz - 1:
-                            continue
-                        z0 = int(np.floor(z))
-                        f = z - z0
-                        z1 = z0 + 1 if z0 + 1 < nz else z0
-                        v = (1.0 - f) * section[z0, jx] + f * section[z1, jx]
-                        s += v
-                        e += v * v
-                        m += 1
-                    num += s * s
-                    den += m * e
+            for r in range(nrow):
+                zr = r - half_samples  # row index z' of the window, may lie outside the section
+                s = 0.0
+                e = 0.0
+                m = 0
+                for dx in range(-half_traces, half_traces + 1):
+                    jx = ix + dx
+                    if jx < 0 or jx >= nx:
+                        continue
+                    z = zr + p * dx
+                    if z < 0.0 or z > nz - 1:
+                        continue
+                    z0 = int(np.floor(z))
+                    f = z - z0
+                    z1 = z0 + 1 if z0 + 1 < nz else z0
+                    v = (1.0 - f) * section[z0, jx] + f * section[z1, jx]
+                    s += v
+                    e += v * v
+                    m += 1
+                num_row[r] = s * s
+                den_row[r] = m * e
+            # window of pixel iz covers rows r = iz .. iz + 2 half_samples
+            num = 0.0
+            den = 0.0
+            for r in range(2 * half_samples + 1):
+                num += num_row[r]
+                den += den_row[r]
+            for iz in range(nz):
+                if iz > 0:
+                    num += num_row[iz + 2 * half_samples] - num_row[iz - 1]
+                    den += den_row[iz + 2 * half_samples] - den_row[iz - 1]
                 c = (num + eps) / (den + eps)
-                if c > best:
-                    best = c
-            out[iz, ix] = best
-    return out
+                if c > best[iz, ix]:
+                    best[iz, ix] = c
+    return best.astype(np.float32)
