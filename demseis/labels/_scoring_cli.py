@@ -172,21 +172,22 @@ def _baseline_command(args: argparse.Namespace) -> int:
 
     from demseis.errors import StoreError
     from demseis.labels.baseline import SemblanceBaseline, semblance_fault_probability
-    from demseis.labels.scoring import _open_truth_store
+    from demseis.labels.scoring import _open_group, _valid_samples
 
     cfg = SemblanceBaseline(half_traces=args.half_traces, half_samples=args.half_samples,
                             max_slope=args.max_slope)
-    store = _open_truth_store(args.store)
-    root = zarr.open_group(args.store, mode="r")
+    root = _open_group(args.store)
     if args.input not in set(root.array_keys()):
-        raise StoreError(f"store {args.store!r} has no {args.input!r} array")
+        raise StoreError(f"store {args.store!r} has no {args.input!r} array; it holds "
+                         f"{sorted(root.array_keys())}")
     seis = root[args.input]
-    if tuple(seis.shape) != store.shape:
-        raise StoreError(f"store {args.store!r}: {args.input!r} has shape {seis.shape} but "
-                         f"'fault' has {store.shape}")
+    if seis.ndim != 3 or 0 in seis.shape:
+        raise StoreError(f"store {args.store!r}: {args.input!r} must be a non-empty (N, H, W) "
+                         f"array, got shape {seis.shape}")
+    valid = _valid_samples(root, int(seis.shape[0]), args.store)
     if os.path.exists(args.out) and not args.overwrite:
         raise InputError(f"--out {args.out!r} exists; pass --overwrite to replace it")
-    n, h, w = store.shape
+    n, h, w = (int(v) for v in seis.shape)
     if args.out.endswith(".npy"):
         out = np.lib.format.open_memmap(args.out + ".part.npy", mode="w+", dtype=np.float32,
                                         shape=(n, h, w))
@@ -195,13 +196,10 @@ def _baseline_command(args: argparse.Namespace) -> int:
                                 dtype="float32", fill_value=0.0, overwrite=True)
         out.attrs["demseis_baseline"] = {"method": "dip-scanned semblance",
                                          "threshold": 0.5, **cfg.__dict__}
-    done = np.flatnonzero(store.valid)
+    done = np.flatnonzero(valid)
     for i in tqdm(done, desc="baseline", unit="sample", disable=not sys.stderr.isatty()):
         out[int(i)] = semblance_fault_probability(np.asarray(seis[int(i)]), cfg)
-    if isinstance(out, np.memmap):
-        skipped = np.setdiff1d(np.arange(n), done)
-        for i in skipped:
-            out[int(i)] = 0.0
+    if isinstance(out, np.memmap):  # a new memmap is zero-filled: skipped samples stay 0
         out.flush()
         del out
         os.replace(args.out + ".part.npy", args.out)

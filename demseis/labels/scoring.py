@@ -503,6 +503,23 @@ def _open_group(path: str) -> Any:
     return root
 
 
+def _valid_samples(root: Any, n: int, path: str) -> NDArray[np.bool_]:
+    """(n,) bool: samples of completed shards (``shard_done == 1``); StoreError if none."""
+    from demseis.errors import StoreError
+
+    valid = np.ones(n, bool)
+    if "shard_done" in set(root.array_keys()):
+        done = np.asarray(root["shard_done"][:]) == 1
+        if done.size == 0 or n % done.size:
+            raise StoreError(f"store {path!r}: {n} samples do not split into "
+                             f"{done.size} shards")
+        valid = np.repeat(done, n // done.size)
+    if not valid.any():
+        raise StoreError(f"store {path!r} is empty: no shard is complete "
+                         "(shard_done is 0 everywhere); finish the sweep first")
+    return valid
+
+
 def _open_truth_store(path: str) -> TruthStore:
     """Open a demseis store read-only for scoring; :class:`StoreError` naming what is wrong.
 
@@ -522,16 +539,7 @@ def _open_truth_store(path: str) -> TruthStore:
     n = int(fault.shape[0])
     if n == 0:
         raise StoreError(f"store {path!r} is empty: 'fault' holds 0 samples")
-    valid = np.ones(n, bool)
-    if "shard_done" in names:
-        done = np.asarray(root["shard_done"][:]).astype(bool)
-        if done.size == 0 or n % done.size:
-            raise StoreError(f"store {path!r}: {n} samples do not split into "
-                             f"{done.size} shards")
-        valid = np.repeat(done, n // done.size)
-    if not valid.any():
-        raise StoreError(f"store {path!r} is empty: no shard is complete "
-                         "(shard_done is 0 everywhere); finish the sweep first")
+    valid = _valid_samples(root, n, path)
     params: dict[str, NDArray[Any]] = {}
     if "params" in set(root.group_keys()):
         for key in root["params"].array_keys():

@@ -137,3 +137,22 @@ def test_cli_baseline_then_score(tmp_path, capsys):
     assert main(["score", str(out), str(tmp_path / "s.zarr"), "--tolerance", "2"]) == 0
     rep = json.loads((tmp_path / "base.score.json").read_text())
     assert rep["overall"]["n_samples"] == 4 and rep["overall"]["ap"] > 0.3
+
+
+def test_cli_baseline_needs_no_labels_but_seismic(tmp_path, capsys):
+    from tests.labels.test_scoring_store import make_store
+
+    make_store(tmp_path / "s.zarr", n_shards=2, per_shard=2, h=16, w=16, with_fault=False)
+    assert main(["baseline", str(tmp_path / "s.zarr"), "--out", str(tmp_path / "p.zarr")]) == 0
+    assert zarr_shape(tmp_path / "p.zarr") == (4, 16, 16)
+    capsys.readouterr()
+    rc = main(["baseline", str(tmp_path / "s.zarr"), "--out", str(tmp_path / "q.npy"),
+               "--input", "impedance"])
+    assert rc == 2 and "'impedance'" in capsys.readouterr().err
+    assert not (tmp_path / "q.npy").exists()
+
+
+def zarr_shape(path):
+    import zarr
+
+    return tuple(zarr.open_array(str(path), mode="r").shape)
