@@ -211,3 +211,18 @@ def test_errors_name_the_problem():
         score(np.zeros((2, 4, 4)), t, tolerance_px=-1)
     with pytest.raises(InputError, match=r"\(N, H, W\)"):
         score(np.zeros(4), np.zeros(4))
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+from hypothesis.extra.numpy import arrays  # noqa: E402
+
+
+@settings(max_examples=60, deadline=None)
+@given(data=st.data(), zd=st.sampled_from([0.0, 1.0]))
+def test_property_tolerance0_equals_sklearn(data, zd):
+    shape = data.draw(st.tuples(st.integers(1, 3), st.integers(1, 6), st.integers(1, 6)))
+    truth = data.draw(arrays(np.bool_, shape))
+    pred = data.draw(arrays(np.uint8, shape, elements=st.integers(0, 1)))
+    r = score(pred, truth, zero_division=zd)
+    assert (r.precision, r.recall, r.f1, r.iou) == pytest.approx(_sk(truth, pred == 1, zd))
