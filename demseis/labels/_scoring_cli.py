@@ -128,12 +128,13 @@ def _score_command(args: argparse.Namespace) -> int:
           f"  threshold {args.threshold:g}  tolerance {args.tolerance:g} px")
     print(format_table(rows))
     print(f"ODS F1 {overall.ods_f1:.3f} at threshold {overall.ods_threshold:.2f}   "
-          f"OIS F1 {overall.ois_f1:.3f}   AP {overall.ap:.3f}")
+          f"OIS F1 {overall.ois_f1:.3f}   AP {overall.ap:.3f}   "
+          f"chance AP (random scores) {overall.chance_ap:.4f}")
 
     prefix = args.out_prefix or _default_prefix(args.predictions)
     os.makedirs(os.path.dirname(os.path.abspath(prefix)), exist_ok=True)
     cols = ["by", "group", "lo", "hi", "n_samples", "precision", "recall", "f1", "iou", "ap",
-            "ods_f1", "tp", "fp", "fn", "tp_truth"]
+            "ods_f1", "chance_ap", "tp", "fp", "fn", "tp_truth"]
     with open(prefix + ".csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=cols)
         w.writeheader()

@@ -41,7 +41,9 @@ rule as the distance transform at every threshold at once.
   (scikit-learn's step definition; precision is taken as 1 where nothing is predicted). It equals
   ``sklearn.metrics.average_precision_score`` when every distinct prediction value is one of the
   thresholds, and otherwise differs by the threshold discretisation (below 0.01 on continuous
-  random scores with the default 99 thresholds, see the tests).
+  random scores with the default 99 thresholds, see the tests);
+- ``chance_ap``: the fraction of pixels within ``r`` of a labelled pixel, which is the precision
+  (and so the average precision) that random scores get: the level a detector must beat.
 """
 
 from __future__ import annotations
@@ -89,6 +91,9 @@ class SampleCounts:
     ----------
     n_pred, n_truth, tp, tp_truth : ndarray, shape (N,), int64
         Predicted, labelled, matched-predicted and matched-labelled fault pixels at ``threshold``.
+    n_near_truth, n_pixels : ndarray, shape (N,), int64
+        Pixels within ``tolerance_px`` of a labelled pixel, and all pixels: their ratio is the
+        precision (and average precision) of random scores, the chance level.
     curve_n_pred, curve_tp, curve_tp_truth : ndarray, shape (N, K), int64
         The same counts at each of the K ``thresholds``.
     thresholds : ndarray, shape (K,), float64
@@ -101,6 +106,8 @@ class SampleCounts:
     n_truth: NDArray[np.int64]
     tp: NDArray[np.int64]
     tp_truth: NDArray[np.int64]
+    n_near_truth: NDArray[np.int64]
+    n_pixels: NDArray[np.int64]
     curve_n_pred: NDArray[np.int64]
     curve_tp: NDArray[np.int64]
     curve_tp_truth: NDArray[np.int64]
@@ -117,8 +124,7 @@ class SampleCounts:
         """Counts of the samples selected by ``index`` (integer indices or a boolean mask)."""
         idx = np.asarray(index)
         kw = {f.name: getattr(self, f.name) for f in fields(self)}
-        for name in ("n_pred", "n_truth", "tp", "tp_truth", "curve_n_pred", "curve_tp",
-                     "curve_tp_truth"):
+        for name in _PER_SAMPLE_FIELDS:
             kw[name] = kw[name][idx]
         return SampleCounts(**kw)
 
@@ -130,10 +136,13 @@ class SampleCounts:
         first = parts[0]
         kw: dict[str, Any] = {"thresholds": first.thresholds, "threshold": first.threshold,
                               "tolerance_px": first.tolerance_px}
-        for name in ("n_pred", "n_truth", "tp", "tp_truth", "curve_n_pred", "curve_tp",
-                     "curve_tp_truth"):
+        for name in _PER_SAMPLE_FIELDS:
             kw[name] = np.concatenate([getattr(p, name) for p in parts], axis=0)
         return SampleCounts(**kw)
+
+
+_PER_SAMPLE_FIELDS = ("n_pred", "n_truth", "tp", "tp_truth", "n_near_truth", "n_pixels",
+                      "curve_n_pred", "curve_tp", "curve_tp_truth")
 
 
 @dataclass(frozen=True)
@@ -196,6 +205,7 @@ class ScoreResult:
     ods_threshold: float
     ois_f1: float
     ap: float
+    chance_ap: float
     thresholds: NDArray[np.float64] = field(repr=False)
     precision_curve: NDArray[np.float64] = field(repr=False)
     recall_curve: NDArray[np.float64] = field(repr=False)
@@ -205,7 +215,7 @@ class ScoreResult:
     def summary(self) -> dict[str, float | int]:
         """The scalar scores as a plain dict (JSON-ready)."""
         keys = ("n_samples", "threshold", "tolerance_px", "precision", "recall", "f1", "iou",
-                "tp", "fp", "fn", "tp_truth", "ods_f1", "ods_threshold", "ois_f1", "ap")
+                "tp", "fp", "fn", "tp_truth", "ods_f1", "ods_threshold", "ois_f1", "ap", "chance_ap")
         return {k: _py(getattr(self, k)) for k in keys}
 
 
@@ -326,7 +336,8 @@ def count_samples(pred: ArrayLike, truth: ArrayLike, threshold: float = 0.5,
                          "match sample for sample and pixel for pixel")
     threshold, tol, thr = _check_settings(threshold, tolerance_px, thresholds)
     n, k = p.shape[0], thr.size
-    out = {name: np.zeros(n, np.int64) for name in ("n_pred", "n_truth", "tp", "tp_truth")}
+    out = {name: np.zeros(n, np.int64) for name in ("n_pred", "n_truth", "tp", "tp_truth",
+                                                     "n_near_truth", "n_pixels")}
     curves = {name: np.zeros((n, k), np.int64) for name in ("curve_n_pred", "curve_tp",
                                                               "curve_tp_truth")}
     foot = disk_footprint(tol) if tol > 0 else None
@@ -348,6 +359,8 @@ def count_samples(pred: ArrayLike, truth: ArrayLike, threshold: float = 0.5,
         out["n_truth"][i] = int(ti.sum())
         out["tp"][i] = int((pos & near_truth).sum())
         out["tp_truth"][i] = int((ti & near_pred).sum())
+        out["n_near_truth"][i] = int(near_truth.sum())
+        out["n_pixels"][i] = int(ti.size)
         curves["curve_n_pred"][i] = _count_ge(pi.ravel(), thr)
         curves["curve_tp"][i] = _count_ge(pi[near_truth], thr)
         curves["curve_tp_truth"][i] = _count_ge(reach[ti], thr)
@@ -390,6 +403,7 @@ def summarise(counts: SampleCounts, zero_division: float = 0.0) -> ScoreResult:
         tp=tp, fp=n_pred - tp, fn=n_truth - tp_truth, tp_truth=tp_truth,
         n_samples=c.n_samples, threshold=c.threshold, tolerance_px=c.tolerance_px,
         ods_f1=float(mc.f1[best]), ods_threshold=float(c.thresholds[best]), ois_f1=ois, ap=ap,
+        chance_ap=float(c.n_near_truth.sum() / c.n_pixels.sum()),
         thresholds=c.thresholds, precision_curve=mc.precision, recall_curve=mc.recall,
         f1_curve=mc.f1, per_sample=per_sample,
     )
@@ -744,11 +758,12 @@ def _row(by: str, group: str, lo: float | None, hi: float | None, c: SampleCount
     r = summarise(c, zero_division)
     return {"by": by, "group": group, "lo": lo, "hi": hi, "n_samples": r.n_samples,
             "precision": r.precision, "recall": r.recall, "f1": r.f1, "iou": r.iou,
-            "ap": r.ap, "ods_f1": r.ods_f1, "tp": r.tp, "fp": r.fp, "fn": r.fn,
+            "ap": r.ap, "ods_f1": r.ods_f1, "chance_ap": r.chance_ap, "tp": r.tp, "fp": r.fp, "fn": r.fn,
             "tp_truth": r.tp_truth}
 
 
-TABLE_COLUMNS = ("by", "group", "n_samples", "precision", "recall", "f1", "iou", "ap", "ods_f1")
+TABLE_COLUMNS = ("by", "group", "n_samples", "precision", "recall", "f1", "iou", "ap", "ods_f1",
+                 "chance_ap")
 
 
 def format_table(rows: list[dict[str, Any]], columns: tuple[str, ...] = TABLE_COLUMNS) -> str:

@@ -226,3 +226,18 @@ def test_property_tolerance0_equals_sklearn(data, zd):
     pred = data.draw(arrays(np.uint8, shape, elements=st.integers(0, 1)))
     r = score(pred, truth, zero_division=zd)
     assert (r.precision, r.recall, r.f1, r.iou) == pytest.approx(_sk(truth, pred == 1, zd))
+
+
+def test_chance_ap_is_what_random_scores_get():
+    rng = np.random.default_rng(11)
+    truth = np.zeros((20, 40, 40), np.uint8)
+    truth[:, :, 13] = 1
+    truth[:, 25, :] = 1
+    pred = rng.random(truth.shape)
+    for tol in (0, 2):
+        r = score(pred, truth, tolerance_px=tol)
+        from scipy import ndimage
+
+        near = np.mean([(ndimage.distance_transform_edt(1 - t) <= tol).mean() for t in truth])
+        assert r.chance_ap == pytest.approx(near)
+        assert r.ap == pytest.approx(r.chance_ap, rel=0.05)
