@@ -11,7 +11,9 @@ along the best of a set of trial slopes, so continuous (also dipping) reflectors
 Subtracting the section median removes the background discontinuity that noise gives every
 window (on synthetic sections at 0 dB SNR it cut false positives on an unfaulted section from
 72 % to 18 % of pixels, with no change on clean sections); the stretch makes a relative
-discontinuity of ``1 - c_ref`` or more probability 1. The default threshold :data:`DEFAULT_THRESHOLD` is the value at which a pixel is
+discontinuity of ``1 - c_ref`` or more probability 1.
+
+The default threshold :data:`DEFAULT_THRESHOLD` is the value at which a pixel is
 called a fault; it was chosen on synthetic Ricker sections (see docs/scoring.md) and users can
 tune it with the ODS threshold that :func:`demseis.labels.scoring.score` reports.
 """

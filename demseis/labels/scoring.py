@@ -77,7 +77,10 @@ def default_thresholds(n: int = 99) -> NDArray[np.float64]:
 
 
 def disk_footprint(radius_px: float) -> NDArray[np.bool_]:
-    """Boolean disk of offsets (dy, dx) with ``dy**2 + dx**2 <= radius_px**2``; shape (2k+1, 2k+1)."""
+    """Boolean disk of offsets (dy, dx) with ``dy**2 + dx**2 <= radius_px**2``.
+
+    Shape (2k+1, 2k+1) with k = floor(radius_px).
+    """
     k = int(np.floor(radius_px))
     dy, dx = np.mgrid[-k : k + 1, -k : k + 1]
     return (dy * dy + dx * dx) <= radius_px * radius_px
@@ -215,7 +218,8 @@ class ScoreResult:
     def summary(self) -> dict[str, float | int]:
         """The scalar scores as a plain dict (JSON-ready)."""
         keys = ("n_samples", "threshold", "tolerance_px", "precision", "recall", "f1", "iou",
-                "tp", "fp", "fn", "tp_truth", "ods_f1", "ods_threshold", "ois_f1", "ap", "chance_ap")
+                "tp", "fp", "fn", "tp_truth", "ods_f1", "ods_threshold", "ois_f1", "ap",
+                "chance_ap")
         return {k: _py(getattr(self, k)) for k in keys}
 
 
@@ -758,7 +762,8 @@ def _row(by: str, group: str, lo: float | None, hi: float | None, c: SampleCount
     r = summarise(c, zero_division)
     return {"by": by, "group": group, "lo": lo, "hi": hi, "n_samples": r.n_samples,
             "precision": r.precision, "recall": r.recall, "f1": r.f1, "iou": r.iou,
-            "ap": r.ap, "ods_f1": r.ods_f1, "chance_ap": r.chance_ap, "tp": r.tp, "fp": r.fp, "fn": r.fn,
+            "ap": r.ap, "ods_f1": r.ods_f1, "chance_ap": r.chance_ap, "tp": r.tp, "fp": r.fp,
+            "fn": r.fn,
             "tp_truth": r.tp_truth}
 
 
