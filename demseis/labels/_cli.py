@@ -7,6 +7,9 @@ import argparse
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add this subpackage's commands to ``sub`` and its benchmarks to ``bench``."""
+    from demseis.labels._scoring_cli import add_scoring_commands
+
+    add_scoring_commands(sub)
     _add_bench_labels(bench)
 
 
