@@ -38,6 +38,8 @@ class SweepSummary:
     completed: list[int] = field(default_factory=list)
     failed: dict[int, str] = field(default_factory=dict)
     seconds: float = 0.0
+    #: seconds from the first task submitted to the last finished (no cluster start-up)
+    compute_seconds: float = 0.0
 
     @property
     def n_samples_written(self) -> int:
@@ -219,8 +221,10 @@ def run_sweep(
     try:
         if pending:
             if workers == 0 and scheduler is None:
+                t_compute = time.perf_counter()
                 for shard in pending:
                     _account(summary, bar, shard_task(str(out), cfg_dict, shard), None)
+                summary.compute_seconds = time.perf_counter() - t_compute
             else:
                 _run_distributed(str(out), cfg_dict, pending, summary, bar, workers, scheduler, retries)
     finally:
@@ -265,6 +269,7 @@ def _run_distributed(store: str, cfg_dict: dict[str, Any], pending: list[int], s
                                    dashboard_address=None, env=env, silence_logs=40)
             client = Client(cluster)
     try:
+        t_compute = time.perf_counter()
         futures = client.map(shard_task, [store] * len(pending), [cfg_dict] * len(pending), pending,
                              retries=retries, pure=False,
                              key=[f"demseis-shard-{s}-{os.getpid()}" for s in pending])
@@ -275,6 +280,7 @@ def _run_distributed(store: str, cfg_dict: dict[str, Any], pending: list[int], s
             else:
                 exc = fut.exception()
                 summary.failed[shard_of[fut.key]] = f"{type(exc).__name__}: {exc}"
+        summary.compute_seconds = time.perf_counter() - t_compute
     finally:
         client.close()
         if cluster is not None:
