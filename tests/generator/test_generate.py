@@ -207,3 +207,40 @@ def test_one_and_two_workers_identical(tiny_store, tmp_path):
     assert main(["generate", "--preset", "tiny", "--out", str(two), "--workers", "2", "--quiet"]) == 0
     assert_same_bytes(tiny_store, one)
     assert_same_bytes(tiny_store, two)
+
+
+@pytest.mark.slow
+def test_killed_worker_is_retried(tmp_path):
+    """SIGKILL one dask worker process mid-sweep: the sweep still completes every shard."""
+    import psutil
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[sweep]\nn_runs = 4\nthrow_m = 200\n[model]\nwidth_m = 2400.0\nheight_m = 800.0\n")
+    out = tmp_path / "k.zarr"
+    proc = subprocess.Popen(_generate_cmd(cfg, out, "--workers", "2"), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    driver = psutil.Process(proc.pid)
+    killed = None
+    deadline = time.time() + 240
+    while time.time() < deadline and proc.poll() is None and killed is None:
+        # worker processes are children of the driver (its nannies) started by multiprocessing's spawn
+        workers = []
+        for p in driver.children(recursive=True):
+            try:
+                # past start-up (imports, cached kernels): computing a DEM run
+                if "spawn_main" in " ".join(p.cmdline()) and sum(p.cpu_times()[:2]) > 6.0:
+                    workers.append(p)
+            except (psutil.NoSuchProcess, psutil.ZombieProcess, psutil.AccessDenied):
+                continue
+        if workers:
+            try:
+                workers[0].send_signal(signal.SIGKILL)
+                killed = workers[0].pid
+            except psutil.NoSuchProcess:
+                pass
+        time.sleep(0.1)
+    stdout, stderr = proc.communicate(timeout=300)
+    assert killed is not None, "never found a worker to kill"
+    assert proc.returncode == 0, stderr[-2000:]
+    assert "4 written now, 0 failed" in stdout
+    assert main(["validate", str(out)]) == 0
