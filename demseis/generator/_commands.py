@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 
-from demseis.errors import ConfigError, InputError
+from demseis.errors import InputError
 
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -39,6 +38,12 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.add_argument("--out", required=True, help="output directory for the PNG files")
     p.add_argument("--run", type=_nonneg_int, default=0, help="run index (default 0)")
     p.set_defaults(func=cmd_preview)
+
+    p = sub.add_parser("plot", help="PNG of one stored sample: section, fault label, damage zone")
+    p.add_argument("store", help="store path")
+    p.add_argument("--sample", type=_nonneg_int, default=0, help="sample index (default 0)")
+    p.add_argument("--out", required=True, help="output PNG path")
+    p.set_defaults(func=cmd_plot)
 
     p = sub.add_parser("render", help="re-render a store's particle snapshots at new frequencies / SNRs")
     p.add_argument("store", help="source store (its DEM snapshots are reused)")
@@ -147,6 +152,13 @@ def cmd_preview(args: argparse.Namespace) -> int:
     written = preview(args.source, args.out, run=args.run)
     for p in written:
         print(p)
+    return 0
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    from demseis.generator.preview import plot_sample
+
+    print(plot_sample(args.store, args.sample, args.out))
     return 0
 
 

@@ -189,3 +189,53 @@ def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
     fig.suptitle("Frequency sensitivity across the deformation sequence")
     save(fig, "fig6_frequency.png")
     return written
+
+
+def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
+    """One stored sample: the section, its fault label over it, and the damage-zone map."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from demseis.datasets import open_store
+
+    root = open_store(store)
+    n = root["seismic"].shape[0]
+    if not 0 <= index < n:
+        raise InputError(f"--sample {index}: the store has samples 0..{n - 1}")
+    attrs = dict(root.attrs)
+    grid = attrs["grid"]
+    codes = attrs.get("param_codes", {})
+    sec = np.asarray(root["seismic"][index])
+    fault = np.asarray(root["fault"][index])
+    damage = np.asarray(root["damage"][index])
+    p = {k: root["params"][k][index] for k in ("run_id", "snapshot", "dip_deg", "throw_m", "freq_hz",
+                                               "snr_db", "noise_kind")}
+    noise = codes.get("noise_kind", ["white", "band"])[int(p["noise_kind"])]
+    w_m = grid["nx"] * grid["cell_m"]
+    h_m = grid["nz"] * grid["cell_m"]
+    extent = (0, w_m / 1000, h_m / 1000, 0)
+    clip = float(np.percentile(np.abs(sec), 99)) or 1.0
+    from matplotlib.colors import ListedColormap
+
+    fig, axes = plt.subplots(1, 3, figsize=(16, 1.3 + 16 / 3 * h_m / w_m), sharey=True, layout="constrained")
+    axes[0].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect="equal")
+    axes[0].set_title(f"seismic: {float(p['freq_hz']):g} Hz, SNR {float(p['snr_db']):g} dB ({noise})")
+    axes[1].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect="equal")
+    axes[1].imshow(np.ma.masked_equal(fault, 0), cmap=ListedColormap(["red"]), extent=extent,
+                   aspect="equal", interpolation="nearest")
+    axes[1].set_title("fault label (red) over the section")
+    axes[2].imshow(damage, cmap="magma", vmin=0, vmax=2, extent=extent, aspect="equal",
+                   interpolation="nearest")
+    axes[2].set_title("damage: 0 background, 1 damage zone, 2 fault core")
+    for ax in axes:
+        ax.set_xlabel("x (km)")
+    axes[0].set_ylabel("depth (km)")
+    fig.suptitle(f"sample {index}: run {int(p['run_id'])}, snapshot {int(p['snapshot'])}, "
+                 f"dip {float(p['dip_deg']):.0f}°, throw so far {float(p['throw_m']):.0f} m")
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return out
