@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from demseis.errors import ConfigError, SimulationError, StoreError
+from demseis.errors import ConfigError, InputError, SimulationError
 from demseis.generator.config import Config, parse_config
 from demseis.generator.pipeline import array_dtypes, grid_of, param_dtypes, run_shard, PARAM_CODES
 
@@ -212,7 +212,13 @@ def run_sweep(
 
     out = Path(out)
     t0 = time.perf_counter()
-    status = prepare_store(cfg, out, overwrite=overwrite)
+    remote = _connect(scheduler) if scheduler is not None else None  # fail before writing
+    try:
+        status = prepare_store(cfg, out, overwrite=overwrite)
+    except BaseException:
+        if remote is not None:
+            remote.close()
+        raise
     pending = [int(i) for i in np.flatnonzero(status != 1)]
     summary = SweepSummary(store=str(out), n_shards=len(status), samples_per_shard=cfg.samples_per_run,
                            done_before=len(status) - len(pending))
@@ -226,9 +232,11 @@ def run_sweep(
                     _account(summary, bar, shard_task(str(out), cfg_dict, shard), None)
                 summary.compute_seconds = time.perf_counter() - t_compute
             else:
-                _run_distributed(str(out), cfg_dict, pending, summary, bar, workers, scheduler, retries)
+                _run_distributed(str(out), cfg_dict, pending, summary, bar, workers, remote, retries)
     finally:
         bar.close()
+        if remote is not None and not pending:
+            remote.close()
     record_failures(out, summary.failed)
     finalize_store(out)
     summary.seconds = time.perf_counter() - t0
@@ -246,17 +254,24 @@ def _account(summary: SweepSummary, bar: Any, result: dict[str, Any] | None, err
         bar.update(result["samples"])
 
 
+def _connect(scheduler: str) -> Any:
+    """A client of the dask scheduler at ``scheduler``; InputError if it cannot be reached."""
+    from distributed import Client
+
+    try:
+        return Client(scheduler, timeout="20s")
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise InputError(f"--scheduler {scheduler!r}: cannot connect ({exc})") from None
+
+
 def _run_distributed(store: str, cfg_dict: dict[str, Any], pending: list[int], summary: SweepSummary,
-                     bar: Any, workers: int | None, scheduler: str | None, retries: int) -> None:
+                     bar: Any, workers: int | None, remote: Any, retries: int) -> None:
     import dask
     from distributed import Client, LocalCluster, as_completed
 
     cluster = None
-    if scheduler is not None:
-        try:
-            client = Client(scheduler, timeout="20s")
-        except (OSError, TimeoutError) as exc:
-            raise StoreError(f"--scheduler {scheduler!r}: cannot connect ({exc})") from None
+    if remote is not None:
+        client = remote
     else:
         warm_numba_cache()
         n = workers or os.cpu_count() or 1

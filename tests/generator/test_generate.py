@@ -244,3 +244,23 @@ def test_killed_worker_is_retried(tmp_path):
     assert proc.returncode == 0, stderr[-2000:]
     assert "4 written now, 0 failed" in stdout
     assert main(["validate", str(out)]) == 0
+
+
+@pytest.mark.slow
+def test_existing_scheduler(tiny_store, tmp_path):
+    """--scheduler ADDRESS runs the same tasks on an existing cluster, same bytes."""
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        out = tmp_path / "s.zarr"
+        assert main(["generate", "--preset", "tiny", "--out", str(out), "--scheduler",
+                     cluster.scheduler_address, "--quiet"]) == 0
+    assert_same_bytes(tiny_store, out)
+
+
+def test_unreachable_scheduler_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "u.zarr"
+    code = main(["generate", "--preset", "tiny", "--out", str(out), "--scheduler", "not-an-address"])
+    assert code == 2
+    assert "--scheduler 'not-an-address'" in capsys.readouterr().err
+    assert not out.exists()
