@@ -55,9 +55,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from demseis.dem import Material  # noqa: E402
+from demseis.dem import Material  # noqa: E402,F401
 from demseis.dem.assembly import draw_radii, loose_grid  # noqa: E402
-from demseis.dem.bench import load_pack, pack_walls, seed_pack  # noqa: E402
+from demseis.dem.bench import BENCH_MATERIAL, load_pack, pack_walls, seed_pack  # noqa: E402
 from demseis.dem.engine import Engine, time_step  # noqa: E402
 
 
@@ -182,7 +182,7 @@ def main(argv=None) -> int:
     if shutil.which("lmp") is None:
         print(json.dumps({"benchmark": "dem_vs_lammps", "error": "lmp not found"}))
         return 1
-    mat = Material()
+    mat = BENCH_MATERIAL
     if args.pack:
         xy, radius = load_pack(args.pack)
     else:

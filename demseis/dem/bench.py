@@ -70,8 +70,12 @@ def pack_walls(xy: np.ndarray, radius: np.ndarray) -> np.ndarray:
     return np.array([[xlo, ylo, xlo, top], [xhi, ylo, xhi, top], [xlo, ylo, xhi, ylo]])
 
 
+#: the benchmark's contact model: frictional, no cohesion (what LAMMPS gran/hooke/history has)
+BENCH_MATERIAL = Material(cohesion_n=0.0)
+
+
 def run_bench(xy: np.ndarray, radius: np.ndarray, n_steps: int = 2000,
-              material: Material = Material(), warmup_steps: int = 20) -> dict:
+              material: Material = BENCH_MATERIAL, warmup_steps: int = 20) -> dict:
     """Time ``n_steps`` frictional-model steps on the pack; returns a JSON-able dict.
 
     The kernels are compiled (or loaded from Numba's cache) and warmed by ``warmup_steps``

@@ -47,8 +47,8 @@ def plot_snapshots(snaps: Sequence[Snapshot], path: str | os.PathLike, *, n_grou
         grp = np.where(s.deposited, s.layer - n_layers, s.layer // lpg)
         colors = cmap((grp % n_groups) / 10.0 + 0.001)
         if s.deposited.any():
-            colors[s.deposited] = plt.get_cmap("Pastel1")((grp[s.deposited] % 8) / 9.0)
-            colors[s.deposited, 3] = 0.6
+            colors[s.deposited] = plt.get_cmap("Set2")((grp[s.deposited] % 8) / 8.0 + 0.001)
+            colors[s.deposited, 3] = 0.55
         d = 2 * s.radius
         ec = EllipseCollection(d, d, np.zeros_like(d), units="xy", offsets=s.xy,
                                transOffset=ax.transData, facecolors=colors, edgecolors="none")
