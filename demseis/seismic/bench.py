@@ -20,13 +20,15 @@ from demseis.seismic.properties import (
 from demseis.seismic.raster import rasterise
 
 
-def _median_ms(fn, repeats: int) -> float:
-    times = []
+def _median_ms(fn, repeats: int) -> tuple[float, float]:
+    """Median wall-clock and process-CPU milliseconds of ``fn()`` over ``repeats`` calls."""
+    wall, cpu = [], []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times) * 1e3)
+        wall.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
+    return float(np.median(wall) * 1e3), float(np.median(cpu) * 1e3)
 
 
 def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: int = 7,
@@ -78,6 +80,7 @@ def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: i
         return synthetic_sections(vg, rg, cell_m, freqs)
 
     render(freqs_hz)  # warm-up: Numba compilation / cache load
+    nf = len(freqs_hz)
     comp = {
         "element_properties": _median_ms(props, repeats),
         "rasterise": _median_ms(rast, repeats),
@@ -85,7 +88,7 @@ def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: i
         "smooth_vp_rho": _median_ms(smoothing, repeats),
         "convolution_1f": _median_ms(lambda: synthetic_sections(vp_g, rho_g, cell_m, f1),
                                      repeats),
-        f"convolution_{len(freqs_hz)}f": _median_ms(
+        f"convolution_{nf}f": _median_ms(
             lambda: synthetic_sections(vp_g, rho_g, cell_m, freqs_hz), repeats),
     }
     full1 = _median_ms(lambda: render(f1), repeats)
@@ -98,10 +101,13 @@ def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: i
         "n_elements": snap.n,
         "freqs_hz": list(freqs_hz),
         "repeats": repeats,
-        "numba_threads": int(os.environ.get("NUMBA_NUM_THREADS", "0")) or None,
-        "ms_snapshot_1f": round(full1, 2),
-        f"ms_snapshot_{len(freqs_hz)}f": round(fulln, 2),
-        "ms_per_section_1f": round(full1, 2),
-        f"ms_per_section_{len(freqs_hz)}f": round(fulln / len(freqs_hz), 2),
-        "components_ms": {k: round(v, 2) for k, v in comp.items()},
+        "loadavg_1min": round(os.getloadavg()[0], 2),
+        "ms_snapshot_1f": round(full1[0], 2),
+        f"ms_snapshot_{nf}f": round(fulln[0], 2),
+        "ms_per_section_1f": round(full1[0], 2),
+        f"ms_per_section_{nf}f": round(fulln[0] / nf, 2),
+        "cpu_ms_snapshot_1f": round(full1[1], 2),
+        f"cpu_ms_snapshot_{nf}f": round(fulln[1], 2),
+        "components_ms": {k: round(v[0], 2) for k, v in comp.items()},
+        "components_cpu_ms": {k: round(v[1], 2) for k, v in comp.items()},
     }

@@ -297,29 +297,36 @@ def smooth(field: np.ndarray, model: PropertyModel) -> np.ndarray:
 
 
 def nearest_element_index(xy: np.ndarray, grid: Grid, want: np.ndarray,
-                          search_m: float | None = None) -> np.ndarray:
+                          bucket_m: float | None = None) -> np.ndarray:
     """Index of the element whose centre is nearest to each wanted cell centre (-1 elsewhere).
 
-    A Numba pass finds it among the elements within ``search_m`` (default 4 cells, at least
-    50 m) of each cell; the few wanted cells with no element that close (e.g. above the
-    surface) are resolved with a k-d tree over all centres. Exact either way.
+    Exact (ties: lowest index), by a ring search over a bucket grid of side ``bucket_m``
+    (default: the mean element spacing, at least one cell).
     """
     xy = np.asarray(xy, dtype=np.float64)
-    search = max(4.0 * grid.cell_m, 50.0) if search_m is None else float(search_m)
-    d2 = np.full(grid.shape, np.inf)
+    want = np.asarray(want, dtype=bool)
     idx = np.full(grid.shape, -1, dtype=np.int64)
-    want = np.ascontiguousarray(want, dtype=np.bool_)
-    _kernels.nearest_element(np.ascontiguousarray(xy[:, 0]), np.ascontiguousarray(xy[:, 1]),
-                             float(grid.x0_m), float(grid.top_m), float(grid.cell_m), grid.nz,
-                             grid.nx, search, want, d2, idx)
-    missing = want & (idx < 0)
-    if missing.any():
-        from scipy.spatial import cKDTree
-
-        ii, jj = np.nonzero(missing)
-        centres = np.column_stack([grid.x_centres()[jj], grid.y_centres()[ii]])
-        _, nearest = cKDTree(xy).query(centres)
-        idx[ii, jj] = nearest
+    ii, jj = np.nonzero(want)
+    if ii.size == 0:
+        return idx
+    x = np.ascontiguousarray(xy[:, 0])
+    y = np.ascontiguousarray(xy[:, 1])
+    x_lo, y_lo = float(x.min()), float(y.min())
+    span_x = float(x.max()) - x_lo
+    span_y = float(y.max()) - y_lo
+    if bucket_m is None:
+        spacing = np.sqrt(max(span_x * span_y, 1.0) / x.size)
+        bucket_m = max(spacing, grid.cell_m)
+    nbx = int(span_x // bucket_m) + 1
+    nby = int(span_y // bucket_m) + 1
+    key = (np.floor((y - y_lo) / bucket_m).astype(np.int64) * nbx
+           + np.floor((x - x_lo) / bucket_m).astype(np.int64))
+    order = np.argsort(key, kind="stable").astype(np.int64)
+    start = np.searchsorted(key[order], np.arange(nbx * nby + 1)).astype(np.int64)
+    out = np.empty(ii.size, dtype=np.int64)
+    _kernels.nearest_element_cells(x, y, order, start, x_lo, y_lo, float(bucket_m), nbx, nby,
+                                   grid.x_centres()[jj], grid.y_centres()[ii], out)
+    idx[ii, jj] = out
     return idx
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from demseis.errors import InputError
-from demseis.seismic._kernels import rasterise_sum
+from demseis.seismic._kernels import divide_by_count, rasterise_sum
 from demseis.seismic.grid import Grid
 
 
@@ -49,7 +49,5 @@ def rasterise(
         np.ascontiguousarray(vals), float(grid.x0_m), float(grid.top_m), float(grid.cell_m),
         grid.nz, grid.nx, total, count,
     )
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean = total / count[:, :, None]
-    mean[count == 0] = np.nan
-    return (mean[:, :, 0] if squeeze else mean), count
+    divide_by_count(total, count)
+    return (total[:, :, 0] if squeeze else total), count

@@ -77,14 +77,15 @@ def test_nearest_element_matches_brute_force():
     grid = Grid(x0_m=0.0, top_m=300.0, cell_m=10.0, nz=30, nx=40)
     xy = np.column_stack([rng.uniform(0, 400, 120), rng.uniform(0, 200, 120)])  # none near top
     want = rng.random(grid.shape) < 0.4
-    idx = nearest_element_index(xy, grid, want, search_m=35.0)  # many need the k-d tree
+    xy[:10] = np.round(xy[:10] / 5.0) * 5.0  # some exact ties
     ii, jj = np.nonzero(want)
     cx = grid.x_centres()[jj]
     cy = grid.y_centres()[ii]
     d2 = (cx[:, None] - xy[None, :, 0]) ** 2 + (cy[:, None] - xy[None, :, 1]) ** 2
-    got = idx[ii, jj]
-    np.testing.assert_allclose(d2[np.arange(got.size), got], d2.min(axis=1))
-    assert np.all(idx[~want] == -1)
+    for bucket in (None, 17.0, 3.0, 900.0):
+        idx = nearest_element_index(xy, grid, want, bucket_m=bucket)
+        np.testing.assert_array_equal(idx[ii, jj], np.argmin(d2, axis=1))
+        assert np.all(idx[~want] == -1)
 
 
 @pytest.mark.parametrize("sigma", [0.5, 0.7, 1.3])
