@@ -18,8 +18,9 @@ def main() -> None:
     p.add_argument("--nx", type=int, default=512)
     p.add_argument("--nz", type=int, default=288)
     p.add_argument("--repeats", type=int, default=7)
+    p.add_argument("--npz", default=None, help="snapshots .npz (e.g. from a DEM run)")
     a = p.parse_args()
-    print(json.dumps(run_benchmark(nx=a.nx, nz=a.nz, repeats=a.repeats)))
+    print(json.dumps(run_benchmark(nx=a.nx, nz=a.nz, repeats=a.repeats, npz=a.npz)))
 
 
 if __name__ == "__main__":

@@ -272,6 +272,46 @@ def containing_cell(t_bottom, t_s, out):
 
 
 @njit(cache=True)
+def _nearest_one(px, py, x, y, order, start, bx0, by0, bsize, nbx, nby):
+    """Index of the element centre nearest to (px, py); see :func:`nearest_element_cells`."""
+    bx = int(np.floor((px - bx0) / bsize))
+    by = int(np.floor((py - by0) / bsize))
+    r_max = max(max(bx, nbx - 1 - bx), max(by, nby - 1 - by)) + 1
+    fx = px - (bx0 + bx * bsize)
+    fy = py - (by0 + by * bsize)
+    d_edge = min(min(fx, bsize - fx), min(fy, bsize - fy))
+    if d_edge < 0.0:
+        d_edge = 0.0
+    best = np.inf
+    bi = -1
+    ring = 0
+    while True:
+        for dy in range(-ring, ring + 1):
+            iy = by + dy
+            if iy < 0 or iy >= nby:
+                continue
+            step = 1 if (ring == 0 or dy == -ring or dy == ring) else 2 * ring
+            dx = -ring
+            while dx <= ring:
+                ix = bx + dx
+                if 0 <= ix < nbx:
+                    b = iy * nbx + ix
+                    for k in range(start[b], start[b + 1]):
+                        e = order[k]
+                        ddx = x[e] - px
+                        ddy = y[e] - py
+                        d2 = ddx * ddx + ddy * ddy
+                        if d2 < best or (d2 == best and e < bi):
+                            best = d2
+                            bi = e
+                dx += step
+        lim = ring * bsize + d_edge
+        if (bi >= 0 and best <= lim * lim) or ring >= r_max:
+            return bi
+        ring += 1
+
+
+@njit(cache=True)
 def nearest_element_cells(x, y, order, start, bx0, by0, bsize, nbx, nby, cx, cy, out_index):
     """Index of the element centre nearest to each query point (exact), via a bucket grid.
 
@@ -290,46 +330,38 @@ def nearest_element_cells(x, y, order, start, bx0, by0, bsize, nbx, nby, cx, cy,
     the edge of its own bucket), so the search stops once the best distance is within that.
     Ties keep the lowest element index (as a brute-force argmin).
     """
-    m = cx.shape[0]
-    for q in range(m):
-        px = cx[q]
-        py = cy[q]
-        bx = int(np.floor((px - bx0) / bsize))
-        by = int(np.floor((py - by0) / bsize))
-        r_max = max(max(bx, nbx - 1 - bx), max(by, nby - 1 - by)) + 1
-        fx = px - (bx0 + bx * bsize)
-        fy = py - (by0 + by * bsize)
-        d_edge = min(min(fx, bsize - fx), min(fy, bsize - fy))
-        if d_edge < 0.0:
-            d_edge = 0.0
-        best = np.inf
-        bi = -1
-        ring = 0
-        while True:
-            for dy in range(-ring, ring + 1):
-                iy = by + dy
-                if iy < 0 or iy >= nby:
-                    continue
-                edge = dy == -ring or dy == ring
-                step = 1 if edge else 2 * ring
-                if ring == 0:
-                    step = 1
-                dx = -ring
-                while dx <= ring:
-                    ix = bx + dx
-                    if 0 <= ix < nbx:
-                        b = iy * nbx + ix
-                        for k in range(start[b], start[b + 1]):
-                            e = order[k]
-                            ddx = x[e] - px
-                            ddy = y[e] - py
-                            d2 = ddx * ddx + ddy * ddy
-                            if d2 < best or (d2 == best and e < bi):
-                                best = d2
-                                bi = e
-                    dx += step
-            lim = ring * bsize + d_edge
-            if (bi >= 0 and best <= lim * lim) or ring >= r_max:
-                break
-            ring += 1
-        out_index[q] = bi
+    for q in range(cx.shape[0]):
+        out_index[q] = _nearest_one(cx[q], cy[q], x, y, order, start, bx0, by0, bsize, nbx, nby)
+
+
+@njit(cache=True)
+def fill_empty_from_layer(mean, count, x, y, order, start, bx0, by0, bsize, nbx, nby,
+                          x0, top, cell, layer, layer_mean):
+    """In place: every empty cell (count 0) of ``mean`` takes the mean values of the layer of
+    the element whose centre is nearest to the cell centre.
+
+    mean : (nz, nx, k) float64; count : (nz, nx) int32; x, y, order, start, bx0, by0, bsize,
+    nbx, nby : the bucket grid of :func:`nearest_element_cells`; x0, top, cell : the grid (m);
+    layer : (n,) int64 layer of each element; layer_mean : (L, k) float64 per-layer means.
+    """
+    nz, nx, k = mean.shape
+    for i in range(nz):
+        py = top - (i + 0.5) * cell
+        for j in range(nx):
+            if count[i, j] == 0:
+                e = _nearest_one(x0 + (j + 0.5) * cell, py, x, y, order, start, bx0, by0, bsize,
+                                 nbx, nby)
+                L = layer[e]
+                for q in range(k):
+                    mean[i, j, q] = layer_mean[L, q]
+
+
+@njit(cache=True)
+def fill_empty_constant(mean, count, value):
+    """In place: every empty cell (count 0) of ``mean`` (nz, nx, k) takes ``value`` (k,)."""
+    nz, nx, k = mean.shape
+    for i in range(nz):
+        for j in range(nx):
+            if count[i, j] == 0:
+                for q in range(k):
+                    mean[i, j, q] = value[q]

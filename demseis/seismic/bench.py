@@ -32,7 +32,8 @@ def _median_ms(fn, repeats: int) -> tuple[float, float]:
 
 
 def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: int = 7,
-                  freqs_hz: tuple[float, ...] = (20.0, 40.0, 60.0), seed: int = 0) -> dict:
+                  freqs_hz: tuple[float, ...] = (20.0, 40.0, 60.0), seed: int = 0,
+                  npz: str | None = None) -> dict:
     """Time the render of one faulted toy snapshot (``nx`` x ``nz`` cells of ``cell_m``).
 
     The snapshot is the last (throw 450 m) of :func:`demseis.seismic.demo.faulted_sequence`
@@ -45,7 +46,14 @@ def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: i
     """
     rng = np.random.default_rng(seed)
     width, height = nx * cell_m, nz * cell_m
-    snap = faulted_sequence(width, height, rng=rng)[-1]
+    if npz is None:
+        snap = faulted_sequence(width, height, rng=rng)[-1]
+        source = "kinematic toy sequence, last snapshot"
+    else:
+        from demseis.seismic.figures import load_snapshots
+
+        snap = load_snapshots(npz)[-1]
+        source = f"{npz}, last snapshot"
     grid = Grid.covering(width, height, cell_m)
     model = PropertyModel().validate()
     lp = draw_layer_properties(int(snap.layer.max()) + 1, model, rng)
@@ -98,7 +106,8 @@ def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: i
         "nz": grid.nz,
         "nx": grid.nx,
         "cell_m": cell_m,
-        "n_elements": snap.n,
+        "snapshot": source,
+        "n_elements": int(snap.ids.shape[0]),
         "freqs_hz": list(freqs_hz),
         "repeats": repeats,
         "loadavg_1min": round(os.getloadavg()[0], 2),

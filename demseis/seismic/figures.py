@@ -76,7 +76,7 @@ def frequency_sequence_figure(snaps, grid: Grid, out: Path, source: str,
             ax.tick_params(labelsize=7)
     fig.suptitle(f"Zero-phase Ricker sections (depth domain, {grid.cell_m:g} m cells) across the "
                  f"deformation sequence; snapshots: {source}", fontsize=10)
-    fig.savefig(out, dpi=130)
+    fig.savefig(out, dpi=100)
     plt.close(fig)
 
 

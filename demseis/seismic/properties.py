@@ -296,21 +296,10 @@ def smooth(field: np.ndarray, model: PropertyModel) -> np.ndarray:
     return a
 
 
-def nearest_element_index(xy: np.ndarray, grid: Grid, want: np.ndarray,
-                          bucket_m: float | None = None) -> np.ndarray:
-    """Index of the element whose centre is nearest to each wanted cell centre (-1 elsewhere).
-
-    Exact (ties: lowest index), by a ring search over a bucket grid of side ``bucket_m``
-    (default: the mean element spacing, at least one cell).
-    """
-    xy = np.asarray(xy, dtype=np.float64)
-    want = np.asarray(want, dtype=bool)
-    idx = np.full(grid.shape, -1, dtype=np.int64)
-    ii, jj = np.nonzero(want)
-    if ii.size == 0:
-        return idx
-    x = np.ascontiguousarray(xy[:, 0])
-    y = np.ascontiguousarray(xy[:, 1])
+def _buckets(xy: np.ndarray, grid: Grid, bucket_m: float | None):
+    """Bucket grid of element centres for the nearest-element search."""
+    x = np.ascontiguousarray(xy[:, 0], dtype=np.float64)
+    y = np.ascontiguousarray(xy[:, 1], dtype=np.float64)
     x_lo, y_lo = float(x.min()), float(y.min())
     span_x = float(x.max()) - x_lo
     span_y = float(y.max()) - y_lo
@@ -323,9 +312,24 @@ def nearest_element_index(xy: np.ndarray, grid: Grid, want: np.ndarray,
            + np.floor((x - x_lo) / bucket_m).astype(np.int64))
     order = np.argsort(key, kind="stable").astype(np.int64)
     start = np.searchsorted(key[order], np.arange(nbx * nby + 1)).astype(np.int64)
+    return x, y, order, start, x_lo, y_lo, float(bucket_m), nbx, nby
+
+
+def nearest_element_index(xy: np.ndarray, grid: Grid, want: np.ndarray,
+                          bucket_m: float | None = None) -> np.ndarray:
+    """Index of the element whose centre is nearest to each wanted cell centre (-1 elsewhere).
+
+    Exact (ties: lowest index), by a ring search over a bucket grid of side ``bucket_m``
+    (default: the mean element spacing, at least one cell).
+    """
+    xy = np.asarray(xy, dtype=np.float64)
+    idx = np.full(grid.shape, -1, dtype=np.int64)
+    ii, jj = np.nonzero(np.asarray(want, dtype=bool))
+    if ii.size == 0:
+        return idx
+    b = _buckets(xy, grid, bucket_m)
     out = np.empty(ii.size, dtype=np.int64)
-    _kernels.nearest_element_cells(x, y, order, start, x_lo, y_lo, float(bucket_m), nbx, nby,
-                                   grid.x_centres()[jj], grid.y_centres()[ii], out)
+    _kernels.nearest_element_cells(*b, grid.x_centres()[jj], grid.y_centres()[ii], out)
     idx[ii, jj] = out
     return idx
 
@@ -335,21 +339,21 @@ def fill_background(mean: np.ndarray, count: np.ndarray, xy: np.ndarray, values:
     """Fill the empty cells (``count == 0``) of rasterised ``mean`` (nz, nx, k) in place.
 
     ``mode="global"``: the mean of all elements; ``"layer"``: the mean of the elements of the
-    layer of the element whose centre is nearest to the cell centre.
+    layer of the element whose centre is nearest to the cell centre (exact nearest search).
     """
-    empty = count == 0
-    if not empty.any():
-        return mean
+    values = np.asarray(values, dtype=np.float64)
     if mode == "global":
-        mean[empty] = values.mean(axis=0)
+        _kernels.fill_empty_constant(mean, count, values.mean(axis=0))
         return mean
+    layer = np.asarray(layer, dtype=np.int64)
     n_layers = int(layer.max()) + 1
     counts = np.bincount(layer, minlength=n_layers).astype(np.float64)
     layer_mean = np.stack([np.bincount(layer, weights=values[:, c], minlength=n_layers)
                            for c in range(values.shape[1])], axis=1)
     layer_mean /= np.maximum(counts, 1.0)[:, None]
-    nearest = nearest_element_index(xy, grid, empty)
-    mean[empty] = layer_mean[layer[nearest[empty]]]
+    b = _buckets(np.asarray(xy, dtype=np.float64), grid, None)
+    _kernels.fill_empty_from_layer(mean, count, *b, float(grid.x0_m), float(grid.top_m),
+                                   float(grid.cell_m), layer, layer_mean)
     return mean
 
 
