@@ -27,6 +27,12 @@ from demseis.seismic.properties import (PropertyModel, draw_layer_properties, el
 from demseis.seismic.raster import rasterise
 
 
+def _extent_km(grid: Grid) -> list[float]:
+    """imshow extent (left, right, bottom, top) in km: x across, depth below the grid top."""
+    return [grid.x0_m / 1e3, (grid.x0_m + grid.nx * grid.cell_m) / 1e3,
+            grid.nz * grid.cell_m / 1e3, 0.0]
+
+
 def load_snapshots(npz: str | Path) -> list[SimpleNamespace]:
     """Snapshots saved in an ``.npz`` (see the module docstring)."""
     d = np.load(npz)
@@ -57,7 +63,7 @@ def frequency_sequence_figure(snaps, grid: Grid, out: Path, source: str,
     model = PropertyModel() if model is None else model
     secs, _ = render_sequence(snaps, grid, freqs_hz, model)
     n = len(snaps)
-    ext = [grid.x0_m / 1e3, (grid.x0_m + grid.nx * grid.cell_m) / 1e3, grid.nz * grid.cell_m / 1e3, 0]
+    ext = _extent_km(grid)
     fig, axes = plt.subplots(len(freqs_hz), n, figsize=(2.6 * n, 1.75 * len(freqs_hz) + 0.6),
                              sharex=True, sharey=True, constrained_layout=True)
     axes = np.atleast_2d(axes)
@@ -99,7 +105,7 @@ def properties_figure(snap, grid: Grid, out: Path, source: str, model: PropertyM
     z = impedance(vp_g, rho_g)
     refl = reflectivity(z)
     sec = synthetic_sections(vp_g, rho_g, grid.cell_m, [freq_hz])[0]
-    ext = [grid.x0_m / 1e3, (grid.x0_m + grid.nx * grid.cell_m) / 1e3, grid.nz * grid.cell_m / 1e3, 0]
+    ext = _extent_km(grid)
     panels = [
         ("rasterised impedance (empty cells white)", z_raw / 1e6, "viridis", None),
         ("background-filled, Gaussian + median", z / 1e6, "viridis", None),

@@ -110,7 +110,8 @@ def convolve(trace: np.ndarray, wavelet: np.ndarray, axis: int = -1) -> np.ndarr
     return out[0] if w.ndim == 1 else out
 
 
-def _check_grids(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float) -> tuple[np.ndarray, np.ndarray]:
+def _check_grids(vp_g: np.ndarray, rho_g: np.ndarray,
+                 cell_m: float) -> tuple[np.ndarray, np.ndarray]:
     vp = np.asarray(vp_g, dtype=np.float64)
     rho = np.asarray(rho_g, dtype=np.float64)
     if vp.ndim != 2 or vp.shape != rho.shape:

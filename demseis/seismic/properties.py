@@ -98,7 +98,8 @@ class PropertyModel:
             raise ConfigError(f"properties.lithologies = {self.lithologies!r}: allowed is a list "
                               "of 1 to 16 non-empty names")
         if len(set(self.lithologies)) != n:
-            raise ConfigError(f"properties.lithologies = {self.lithologies!r}: names must be unique")
+            raise ConfigError(f"properties.lithologies = {self.lithologies!r}: names must be "
+                              "unique")
         per_lith = {
             "lithology_weights": (0.0, float("inf")),
             "vp_min_m_s": (1200.0, 8000.0),

@@ -8,7 +8,8 @@ from hypothesis import strategies as st
 
 from demseis.seismic import Grid, rasterise
 from demseis.seismic import _kernels
-from demseis.seismic.properties import PropertyModel, gaussian_weights, nearest_element_index, smooth
+from demseis.seismic.properties import (PropertyModel, gaussian_weights, nearest_element_index,
+                                        smooth)
 
 
 def slow_rasterise(xy, radius, values, grid):
