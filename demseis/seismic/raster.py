@@ -41,6 +41,8 @@ def rasterise(
             f"rasterise: expected xy (n, 2), radius (n,), values (n[, k]); got "
             f"{xy.shape}, {radius.shape}, {np.shape(values)}"
         )
+    if not (np.all(np.isfinite(xy)) and np.all(np.isfinite(radius)) and np.all(radius >= 0)):
+        raise InputError("rasterise: xy and radius must be finite and radius >= 0 m")
     k = vals.shape[1]
     total = np.zeros((grid.nz, grid.nx, k), dtype=np.float64)
     count = np.zeros((grid.nz, grid.nx), dtype=np.int32)

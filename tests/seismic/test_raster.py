@@ -114,3 +114,18 @@ def test_smooth_is_gaussian_then_median():
     np.testing.assert_allclose(smooth(a, m), ref, atol=1e-10)
     off = PropertyModel(gaussian_sigma_cells=0.0, median_size_cells=1)
     np.testing.assert_array_equal(smooth(a, off), a)
+
+
+def test_grid_and_rasterise_reject_bad_input():
+    from demseis.errors import InputError
+
+    with pytest.raises(InputError, match="cell_m"):
+        Grid.covering(100.0, 100.0, cell_m=0.0)
+    with pytest.raises(InputError, match="nz"):
+        Grid(x0_m=0.0, top_m=10.0, cell_m=1.0, nz=0, nx=3)
+    grid = Grid.covering(100.0, 100.0)
+    assert grid.shape == (10, 10)
+    with pytest.raises(InputError, match="radius"):
+        rasterise(np.zeros((1, 2)), np.array([-1.0]), np.ones(1), grid)
+    with pytest.raises(InputError, match="expected xy"):
+        rasterise(np.zeros((2, 3)), np.ones(2), np.ones(2), grid)
