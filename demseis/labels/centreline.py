@@ -1,6 +1,6 @@
 """Centre lines of banded masks: spur pruning and along-strike smoothing of a skeleton.
 
-The Zhang-Suen skeleton of a thresholded strain band follows the band's edges, which in a
+The skeleton of a thresholded strain band follows the band's edges, which in a
 granular assembly are stepped at the scale of the elements (3-4 cells at 10 m for 12.5-25 m
 radii). Averaging the skeleton's coordinates along its own length over a window of a few
 element diameters removes that stepping while keeping the trace where the strain is.
