@@ -55,6 +55,11 @@ def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = 
     layer = np.asarray(snapshot.layer)
     n = xy.shape[0]
     if isinstance(strain_per_element, StrainState):
+        if not np.array_equal(strain_per_element.ids, np.asarray(snapshot.ids)):
+            raise InputError(
+                f"strain_per_element is the StrainState of snapshot {strain_per_element.index}; "
+                f"its element ids do not match those of snapshot {getattr(snapshot, 'index', '?')}"
+            )
         strain_e = strain_per_element.measure(cfg.strain_measure)
     else:
         strain_e = np.asarray(strain_per_element, dtype=np.float64)

@@ -168,6 +168,10 @@ def test_label_maps_accepts_strain_state_and_is_deterministic(pack_small):
     assert a["fault"].sum() > 0
     with pytest.raises(InputError, match="strain_per_element"):
         label_maps(snaps[1], hist[1].total[:-1], grid)
+    with pytest.raises(InputError, match="ids do not match"):
+        n = xy.shape[0]
+        label_maps(Snapshot(1, 1, 0.0, np.arange(n)[::-1].copy(), cur[::-1], r[::-1],
+                            np.zeros(n, np.int16), np.zeros(n, bool)), hist[1], grid)
 
 
 def test_skeleton_matches_scikit_image_thin():
