@@ -9,8 +9,10 @@ labels are pixel-aligned with it:
    free surface) are "no rock": strain 0, layer -1, never fault.
 2. optional Gaussian smoothing (``smooth_sigma_cells``) of the strain used for thresholding.
 3. fault = strain >= ``fault_threshold``; 8-connected components smaller than
-   ``min_component_cells`` dropped; with ``thickness_cells`` = t >= 1 the mask is thinned to a
-   one-cell skeleton (Guo-Hall) and re-grown to the cells within t/2 of the skeleton.
+   ``min_component_cells`` dropped; with ``thickness_cells`` = t >= 1 small holes are filled,
+   the mask is thinned to a one-cell skeleton (Guo-Hall), short side branches are pruned, each
+   branch is moving-averaged along its length (``centreline_window_cells``) and the result is
+   re-grown to the cells within t/2 of that centre line.
 4. damage = 0 background, 1 strain >= ``damage_threshold`` (small components dropped),
    2 fault core (the fault mask).
 """
