@@ -6,7 +6,8 @@ walls are present (below the lowered hanging-wall top): ``on_line`` = fraction o
 within 2 cells of the line, ``covered`` = fraction of the line with a mask cell within 2 cells.
 Prints one JSON line; --figure writes a picture of one case.
 
-    PYTHONPATH=$PWD python benchmarks/labels_kinematic.py [--figure docs/figures/labels_kinematic.png]
+    PYTHONPATH=$PWD python benchmarks/labels_kinematic.py \
+        [--figure docs/figures/labels_kinematic.png]
 """
 
 from __future__ import annotations
@@ -97,8 +98,8 @@ def main() -> None:
         ax[0].set_title("rasterised gamma_max, rigid offset 150 m on a 60 deg fault")
         for a, t in zip(ax[1:], (1.0, 3.0)):
             m = label_maps(snap, g, grid, LabelConfig(thickness_cells=t))
-            a.imshow(np.ma.masked_equal(m["damage"], 0), cmap=ListedColormap(["#ffb000", "#d00000"]),
-                     vmin=1, vmax=2, extent=ext, interpolation="nearest")
+            cmap = ListedColormap(["#ffb000", "#d00000"])
+            a.imshow(np.ma.masked_equal(m["damage"], 0), cmap=cmap, vmin=1, vmax=2, extent=ext, interpolation="nearest")
             a.set_title(f"damage (orange) / fault (red), thickness_cells={t:.0f}")
         for a in ax:
             a.plot([XF, XF - H / np.tan(np.radians(dip))], [0, H], "c-", lw=0.8)

@@ -79,7 +79,8 @@ def neighbour_lists(
 
     Returns
     -------
-    offsets : (n + 1,) int64; index : (m,) int64. Neighbours of i: ``index[offsets[i]:offsets[i+1]]``.
+    offsets : (n + 1,) int64; index : (m,) int64.
+        Neighbours of i: ``index[offsets[i]:offsets[i+1]]``.
     """
     xy, radii = _check_xy_radii(xy, radii, "xy")
     x = np.ascontiguousarray(xy[:, 0])
