@@ -75,8 +75,9 @@ def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = 
     rock = owner >= 0
     layer_map = np.full(grid.shape, -1, dtype=np.int16)
     layer_map[rock] = layer[owner[rock]].astype(np.int16)
-    fault = fault_mask(strain, cfg, rock=rock)
-    damage = damage_map(strain, fault, cfg, rock=rock)
+    smoothed = _smoothed(strain, cfg.smooth_sigma_cells, rock)
+    fault = fault_mask(strain, cfg, rock=rock, smoothed=smoothed)
+    damage = damage_map(strain, fault, cfg, rock=rock, smoothed=smoothed)
     return {"fault": fault, "damage": damage, "strain": strain.astype(np.float32),
             "layer": layer_map}
 
@@ -131,7 +132,7 @@ def rasterise_strain(xy: np.ndarray, radius: np.ndarray, values: np.ndarray,
 
 
 def fault_mask(strain: np.ndarray, config: LabelConfig | None = None,
-               rock: np.ndarray | None = None) -> np.ndarray:
+               rock: np.ndarray | None = None, smoothed: np.ndarray | None = None) -> np.ndarray:
     """Binary fault mask from a rasterised strain field.
 
     Parameters
@@ -139,13 +140,14 @@ def fault_mask(strain: np.ndarray, config: LabelConfig | None = None,
     strain : (nz, nx) float gamma_max on the grid.
     config : thresholds, smoothing, minimum component size and thickness control.
     rock : (nz, nx) bool, cells inside the rock (default: all); the mask is 0 elsewhere.
+    smoothed : the strain already smoothed with ``config.smooth_sigma_cells`` (optional).
 
     Returns
     -------
     (nz, nx) uint8, 1 = fault.
     """
     cfg = (config or LabelConfig()).validate()
-    s = _smoothed(strain, cfg.smooth_sigma_cells, rock)
+    s = _smoothed(strain, cfg.smooth_sigma_cells, rock) if smoothed is None else smoothed
     mask = s >= cfg.fault_threshold
     if rock is not None:
         mask &= rock
@@ -159,7 +161,7 @@ def fault_mask(strain: np.ndarray, config: LabelConfig | None = None,
 
 
 def damage_map(strain: np.ndarray, fault: np.ndarray, config: LabelConfig | None = None,
-               rock: np.ndarray | None = None) -> np.ndarray:
+               rock: np.ndarray | None = None, smoothed: np.ndarray | None = None) -> np.ndarray:
     """Three-class map: 0 background, 1 damage zone (strain >= damage_threshold), 2 fault core.
 
     Parameters
@@ -168,9 +170,10 @@ def damage_map(strain: np.ndarray, fault: np.ndarray, config: LabelConfig | None
     fault : (nz, nx) fault mask (nonzero = fault core), e.g. from :func:`fault_mask`.
     config : ``damage_threshold``, ``smooth_sigma_cells``, ``min_component_cells``.
     rock : (nz, nx) bool cells inside the rock (default: all).
+    smoothed : the strain already smoothed with ``config.smooth_sigma_cells`` (optional).
     """
     cfg = (config or LabelConfig()).validate()
-    s = _smoothed(strain, cfg.smooth_sigma_cells, rock)
+    s = _smoothed(strain, cfg.smooth_sigma_cells, rock) if smoothed is None else smoothed
     dz = s >= cfg.damage_threshold
     if rock is not None:
         dz &= rock
