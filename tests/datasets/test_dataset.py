@@ -184,3 +184,19 @@ def test_import_is_light():
             "print(any(m in sys.modules for m in ('torch', 'dask', 'matplotlib')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_crop_offsets_cover_the_range_uniformly():
+    from demseis.datasets.dataset import crop_offsets
+
+    samples = np.arange(200_000)
+    r, c = crop_offsets(3, 0, samples, 22, 245)
+    assert r.min() == 0 and r.max() == 21 and c.min() == 0 and c.max() == 244
+    # chi-square against uniform (22 bins): far below the 0.1 % critical value (~46.8, 21 dof)
+    counts = np.bincount(r, minlength=22)
+    chi2 = ((counts - len(samples) / 22) ** 2 / (len(samples) / 22)).sum()
+    assert chi2 < 46.8
+    assert abs(np.corrcoef(r, c)[0, 1]) < 0.01  # rows and columns independent
+    r2, _ = crop_offsets(3, 1, samples, 22, 245)
+    assert (r2 == r).mean() < 0.1  # a new epoch gives new windows
+    np.testing.assert_array_equal(crop_offsets(3, 0, samples[::7], 22, 245)[0], r[::7])
