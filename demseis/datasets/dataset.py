@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numcodecs import blosc
 
 from demseis.datasets._shardio import RawShardReader, raw_shard_layout
 from demseis.datasets.store import SAMPLE_ARRAYS, fill_value_for, open_store, store_layout
@@ -55,6 +56,14 @@ def split_of_shards(n_shards: int, fractions: Sequence[float] = (0.8, 0.1, 0.1),
 
 
 _MASK64 = (1 << 64) - 1
+
+
+def _in_dataloader_worker() -> bool:
+    """True inside a torch DataLoader worker process (torch is then already imported)."""
+    import sys
+
+    data = sys.modules.get("torch.utils.data")
+    return bool(data is not None and data.get_worker_info() is not None)
 
 
 def _splitmix64(x: np.ndarray) -> np.ndarray:
@@ -263,6 +272,9 @@ class FaultSegDataset:
         """Open the store in this process: zarr arrays plus raw readers where possible."""
         group = open_store(self.path, "r")
         self._arrays, self._raw = {}, {}
+        if _in_dataloader_worker():
+            # one decoding thread per worker process: the workers are the parallelism
+            blosc.use_threads = False
         for n in set(self.inputs + self.targets):
             arr = group[n]
             self._arrays[n] = arr
