@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 
 import numpy as np
 import pytest
@@ -11,6 +12,17 @@ import zarr
 from demseis.datasets import open_store, record_failures, validate_store
 from demseis.generator.cli import main
 from tests.datasets._helpers import make_store
+
+
+@pytest.fixture(scope="module")
+def pristine(tmp_path_factory):
+    """A complete 4-shard store, copied by the tests that damage it."""
+    return make_store(tmp_path_factory.mktemp("pristine") / "s.zarr")
+
+
+def _copy(src, dst):
+    shutil.copytree(src, dst)
+    return dst
 
 
 def _raw_group(path):
@@ -45,8 +57,8 @@ def test_clean_store_passes_and_pending_shards_are_not_problems(tmp_path, capsys
         (lambda g: g["shard_done"].__setitem__(0, 2), "shard_done holds values other than 0/1"),
     ],
 )
-def test_damage_is_reported(tmp_path, capsys, damage, expected):
-    path = make_store(tmp_path / "s.zarr")
+def test_damage_is_reported(tmp_path, capsys, pristine, damage, expected):
+    path = _copy(pristine, tmp_path / "s.zarr")
     damage(_raw_group(path))
     report = validate_store(path)
     assert not report.ok
@@ -66,8 +78,8 @@ def test_done_flag_on_never_written_shard(tmp_path):
     assert "shard 2: parameter run_id has missing values" in text
 
 
-def test_truncated_shard_file_is_reported(tmp_path):
-    path = make_store(tmp_path / "s.zarr")
+def test_truncated_shard_file_is_reported(tmp_path, pristine):
+    path = _copy(pristine, tmp_path / "s.zarr")
     shard_file = path / "seismic" / "c" / "1" / "0" / "0"
     shard_file.write_bytes(shard_file.read_bytes()[:1000])
     problems = validate_store(path).problems
