@@ -16,9 +16,12 @@ any other codec chain are read through zarr. The result is identical to zarr's (
 
 from __future__ import annotations
 
+import mmap
+import os
 from pathlib import Path
 
 import numpy as np
+from numcodecs import blosc
 
 from demseis.errors import StoreError
 
@@ -92,9 +95,9 @@ class RawShardReader:
         self.dtype = np.dtype(dtype)
         self.fill_value = fill_value
         self.chunk_nbytes = shape[0] * shape[1] * self.dtype.itemsize
-        self._open: dict[int, tuple[np.memmap, np.ndarray]] = {}
+        self._open: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
-    def _shard(self, shard: int) -> tuple[np.memmap, np.ndarray]:
+    def _shard(self, shard: int) -> tuple[np.ndarray, np.ndarray]:
         got = self._open.get(shard)
         if got is not None:
             return got
@@ -103,7 +106,12 @@ class RawShardReader:
         path = self.array_dir / "c" / str(shard) / "0" / "0"
         if not path.is_file():
             raise StoreError(f"shard file {str(path)!r} is missing")
-        mm = np.memmap(path, dtype=np.uint8, mode="r")
+        with open(path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            if size == 0:
+                raise StoreError(f"shard file {str(path)!r} is empty")
+            # a plain ndarray over the map: slicing it is cheaper than slicing an np.memmap
+            mm = np.frombuffer(mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ), dtype=np.uint8)
         index_nbytes = self.s * 16
         if mm.shape[0] < index_nbytes + 4:
             raise StoreError(f"shard file {str(path)!r} is truncated")
@@ -132,8 +140,6 @@ class RawShardReader:
             w = len(range(*cols.indices(self.shape[1])))
             return np.full((h, w), self.fill_value, dtype=self.dtype.newbyteorder("="))
         if self.compressor == "blosc":
-            from numcodecs import blosc
-
             raw = blosc.decompress(mm[int(off): int(off + index[local, 1])])
             if len(raw) != self.chunk_nbytes:
                 raise StoreError(f"chunk {sample} of {str(self.array_dir)!r} decodes to "

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numcodecs import blosc
 
 from demseis.datasets._shardio import RawShardReader, raw_shard_layout
 from demseis.datasets.store import SAMPLE_ARRAYS, fill_value_for, open_store, store_layout
@@ -52,6 +53,43 @@ def split_of_shards(n_shards: int, fractions: Sequence[float] = (0.8, 0.1, 0.1),
     labels[order[n - n_val - n_test: n - n_test]] = 1
     labels[order[n - n_test:]] = 2
     return labels
+
+
+_MASK64 = (1 << 64) - 1
+
+
+def _in_dataloader_worker() -> bool:
+    """True inside a torch DataLoader worker process (torch is then already imported)."""
+    import sys
+
+    data = sys.modules.get("torch.utils.data")
+    return bool(data is not None and data.get_worker_info() is not None)
+
+
+def _splitmix64(x: np.ndarray) -> np.ndarray:
+    """SplitMix64 finaliser on uint64 arrays (a bijective, well-mixing integer hash)."""
+    x = x + np.uint64(0x9E3779B97F4A7C15)
+    x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return x ^ (x >> np.uint64(31))
+
+
+def crop_offsets(seed: int, epoch: int, samples: np.ndarray, n_rows: int,
+                 n_cols: int) -> tuple[np.ndarray, np.ndarray]:
+    """Crop window origins of ``samples`` in ``epoch``: row in [0, n_rows), column in [0, n_cols).
+
+    A pure function of (seed, epoch, sample index), vectorised: SplitMix64 of the three
+    chained, one 32-bit half per coordinate, reduced by multiply-shift (bias < n / 2**32).
+    """
+    with np.errstate(over="ignore"):
+        key = _splitmix64(np.asarray([seed & _MASK64], dtype=np.uint64))
+        key = _splitmix64(key ^ np.uint64(epoch & _MASK64))
+        h = _splitmix64(key ^ np.asarray(samples, dtype=np.uint64))
+    lo = h & np.uint64(0xFFFFFFFF)
+    hi = h >> np.uint64(32)
+    rows = ((lo * np.uint64(n_rows)) >> np.uint64(32)).astype(np.int64)
+    cols = ((hi * np.uint64(n_cols)) >> np.uint64(32)).astype(np.int64)
+    return rows, cols
 
 
 def _where_mask(where: Any, params: Mapping[str, np.ndarray], n: int) -> np.ndarray:
@@ -118,8 +156,8 @@ class FaultSegDataset:
     crop : None (whole samples), an int (square) or (h, w): a random window, the same for the
         inputs and the targets of one sample.
     transform : callable ``(x, y) -> (x, y)`` applied to the tensors of each item.
-    seed : seed of the crop positions. The window of sample ``i`` in epoch ``e`` is drawn from
-        ``default_rng([seed, e, i])``, so it does not depend on worker count or order.
+    seed : seed of the crop positions. The window of sample ``i`` in epoch ``e`` is a hash of
+        ``(seed, e, i)`` (:func:`crop_offsets`), so it does not depend on worker count or order.
     long_labels : return label targets (fault, damage, layer) as int64 instead of their compact
         storage dtypes (uint8, uint8, int16). Compact labels move 8x fewer bytes from the
         DataLoader workers (measured to be the bottleneck with 2 workers); cast on the device:
@@ -234,6 +272,9 @@ class FaultSegDataset:
         """Open the store in this process: zarr arrays plus raw readers where possible."""
         group = open_store(self.path, "r")
         self._arrays, self._raw = {}, {}
+        if _in_dataloader_worker():
+            # one decoding thread per worker process: the workers are the parallelism
+            blosc.use_threads = False
         for n in set(self.inputs + self.targets):
             arr = group[n]
             self._arrays[n] = arr
@@ -247,13 +288,8 @@ class FaultSegDataset:
         if self.crop is None:
             return [(slice(0, h), slice(0, w))] * len(globals_)
         ch, cw = self.crop
-        out = []
-        for g in globals_.tolist():
-            rng = np.random.default_rng([self.seed, self.epoch, g])
-            r0 = int(rng.integers(0, h - ch + 1))
-            c0 = int(rng.integers(0, w - cw + 1))
-            out.append((slice(r0, r0 + ch), slice(c0, c0 + cw)))
-        return out
+        r0, c0 = crop_offsets(self.seed, self.epoch, globals_, h - ch + 1, w - cw + 1)
+        return [(slice(r, r + ch), slice(c, c + cw)) for r, c in zip(r0.tolist(), c0.tolist())]
 
     def _read_numpy(self, positions: Sequence[int]) -> dict[str, list[np.ndarray]]:
         """Cropped arrays of items ``positions``: name -> list of (h, w) arrays, in order."""
@@ -298,7 +334,10 @@ class FaultSegDataset:
     def _item(self, data: dict[str, list[np.ndarray]], m: int):
         import torch
 
-        x = np.stack([data[n][m] for n in self.inputs]).astype(np.float32, copy=False)
+        if len(self.inputs) == 1:  # no stacking copy for the usual single input
+            x = data[self.inputs[0]][m][None].astype(np.float32, copy=False)
+        else:
+            x = np.stack([data[n][m] for n in self.inputs]).astype(np.float32, copy=False)
         ys = {}
         for n in self.targets:
             v = data[n][m]

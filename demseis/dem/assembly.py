@@ -18,7 +18,7 @@ import hashlib
 import json
 import math
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +31,10 @@ from demseis.errors import InputError
 _PACKING_GUESS = 0.84
 #: mass-proportional damping rate (1/s) used while settling a pack
 _SETTLE_RATE = 0.5
+#: mass-proportional damping rate (1/s) of the frictionless fall (terminal speed g / rate)
+_FALL_RATE = 0.15
+#: contact softening of the frictionless settling stage
+_SETTLE_SOFTEN = 4.0
 
 
 @dataclass(frozen=True)
@@ -152,8 +156,10 @@ def settle_pack(width_m: float, height_m: float, *, radius_min_m: float = 12.5,
     Notes
     -----
     Stage 1 settles frictionless (mu = 0, also on the walls), which packs densely; stage 2
-    switches friction on and lets the contacts load up. Both use a mass-proportional damping
-    rate of 0.5 /s for quick relaxation; the faulting run uses the material's own damping.
+    switches friction on and lets the contacts load up. Stage 1 is mass-scaled and softened (it
+    only has to reach a dense packing); stage 2 uses the true masses and stiffness. Both use
+    mass-proportional damping (0.15 /s and 0.5 /s) for quick relaxation; the faulting run uses
+    the material's own global damping.
     """
     _check_geometry(width_m, height_m, radius_min_m, radius_max_m)
     validate_material(material)
@@ -180,28 +186,38 @@ def settle_pack(width_m: float, height_m: float, *, radius_min_m: float = 12.5,
     n = int(math.ceil(1.10 * _PACKING_GUESS * width_m * height_m / mean_area))
     radii = draw_radii(n, radius_min_m, radius_max_m, rng)
     xy = loose_grid(radii, 0.0, width_m, 0.0, rng, gap=0.05 * radius_min_m)
-    mass = material.density_kg_m3 * math.pi * radii**2
-    dt = time_step(float(radii.min()), material.density_kg_m3, material.kn_n_m)
-    eng = Engine(xy, radii, material, dt_s=dt, eta=_SETTLE_RATE * mass, friction=0.0, cohesion_n=0.0,
-                 wall_friction=0.0)
+    # Stage 1 (frictionless fall and compaction) is not a physical result, only a way to a
+    # dense packing: it runs mass-scaled (every disk gets the largest disk's mass) and with a
+    # softer contact (Kn / _SETTLE_SOFTEN), so its step is 2 * sqrt(_SETTLE_SOFTEN) larger.
+    soft = replace(material, kn_n_m=material.kn_n_m / _SETTLE_SOFTEN)
+    m_big = material.density_kg_m3 * math.pi * float(radii.max()) ** 2
+    dt1 = 0.25 * math.sqrt(m_big / soft.kn_n_m)
+    eng = Engine(xy, radii, soft, dt_s=dt1, mass_kg=m_big, eta=_FALL_RATE * m_big,
+                 friction=0.0, cohesion_n=0.0, wall_friction=0.0, skin_m=0.8 * radius_min_m)
     top = float(xy[:, 1].max()) + 10 * radius_max_m
-    eng.set_walls(np.array([[0.0, -radius_max_m, 0.0, top],
-                            [width_m, -radius_max_m, width_m, top],
-                            [-radius_max_m, 0.0, width_m + radius_max_m, 0.0]]))
+    walls = np.array([[0.0, -radius_max_m, 0.0, top],
+                      [width_m, -radius_max_m, width_m, top],
+                      [-radius_max_m, 0.0, width_m + radius_max_m, 0.0]])
+    eng.set_walls(walls)
     eng.box = np.array([-2 * radius_max_m, width_m + 2 * radius_max_m, -2 * radius_max_m, top])
     eng.vmax_limit = 400.0
-    # free fall of the loose rows takes ~sqrt(2 h / g); then compaction
+    # free fall of the loose grid takes ~sqrt(2 h / g) at most; then compaction
     drop = float(xy[:, 1].max()) - height_m
-    t_fall = math.sqrt(2 * max(drop, radius_max_m) / max(material.gravity_m_s2, 1e-6))
-    v_term = material.gravity_m_s2 / _SETTLE_RATE
-    n1 = int((2 * t_fall + 2 * drop / max(v_term, 1e-6)) / dt) + 6000
-    eng.settle(n1, v_tol_m_s=0.02, min_steps=int(t_fall / dt))
+    g = max(material.gravity_m_s2, 1e-6)
+    t_fall = math.sqrt(2 * max(drop, radius_max_m) / g)
+    eng.settle(int((4 * t_fall + 20 / _FALL_RATE) / dt1) + 2000, v_tol_m_s=0.05,
+               min_steps=int(t_fall / dt1))
     if progress:
         progress(0.6)
-    eng.mu = material.friction
-    eng.wall_mu = material.friction
-    eng.c0 = material.cohesion_n
-    eng.settle(4000, v_tol_m_s=0.01, min_steps=1000)
+    # Stage 2: the real masses, stiffness, friction and damping rate; contacts load up.
+    mass = material.density_kg_m3 * math.pi * radii**2
+    dt = time_step(float(radii.min()), material.density_kg_m3, material.kn_n_m)
+    eng2 = Engine(eng.pos, radii, material, dt_s=dt, eta=_SETTLE_RATE * mass)
+    eng2.set_walls(walls)
+    eng2.box = eng.box
+    eng2.vmax_limit = 400.0
+    eng2.settle(6000, v_tol_m_s=0.01, min_steps=1000)
+    eng = eng2
     if progress:
         progress(1.0)
     keep = eng.pos[:, 1] <= height_m

@@ -70,13 +70,15 @@ class Engine:
         frictionless settling stage).
     wall_friction : wall friction coefficient (default: the contact friction).
     skin_m : Verlet skin (m); default 0.3 * r_min, and at least enough for intact bonds.
+    capacity : initial Verlet-list row capacity (grown automatically).
+    mass_kg : override the element masses (scalar or (n,)); used for mass-scaled settling.
     """
 
     def __init__(self, pos: np.ndarray, radius: np.ndarray, material: Material, *,
                  dt_s: float | None = None, eta: float | np.ndarray | None = None,
                  friction: float | None = None, cohesion_n: float | None = None,
                  wall_friction: float | None = None, skin_m: float | None = None,
-                 capacity: int = 12) -> None:
+                 capacity: int = 12, mass_kg: np.ndarray | None = None) -> None:
         validate_material(material)
         self.material = material
         self.pos = np.ascontiguousarray(pos, dtype=np.float64).copy()
@@ -90,6 +92,8 @@ class Engine:
         self.dt = float(dt_s) if dt_s is not None else time_step(
             rmin, material.density_kg_m3, material.kn_n_m)
         self.mass = material.density_kg_m3 * math.pi * self.radius**2
+        if mass_kg is not None:
+            self.mass = np.broadcast_to(np.asarray(mass_kg, np.float64), (n,)).copy()
         self.inv_mass = 1.0 / self.mass
         self._eta_default = eta
         self.eta = self._make_eta(eta, n)

@@ -7,9 +7,10 @@ Geometry (dip towards +x; ``dip_direction="left"`` is run mirrored and mirrored 
 - moving down-dip at ``speed * (cos d, -sin d)``: the hanging-wall base (from the fault to the
   right edge) and the right wall, until the vertical throw reaches ``throw_m``.
 
-Sedimentation: halfway between snapshots, wherever the top surface lies below the initial
-surface (``height_m``) by more than one mean element diameter, new elements of a new growth layer
-are dropped into the accommodation and settle there. They get new ids and ``deposited=True``.
+Sedimentation: at 1/4 and 1/2 of each interval between snapshots, wherever the top surface
+lies below the initial surface (``height_m``), new elements of that interval's growth layer fill
+the accommodation. They are cut from the run's own dense settled packing (so a growth layer is
+as dense as the pre-kinematic ones), get new ids and ``deposited=True``, and settle in place.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from demseis.dem.assembly import Assembly, draw_radii
+from demseis.dem.assembly import Assembly
 from demseis.dem.engine import Engine, validate_material
 from demseis.dem.types import Material, NormalFault, Snapshot
 from demseis.errors import InputError
@@ -58,48 +59,62 @@ def surface_profile(xy: np.ndarray, radius: np.ndarray, x_edges: np.ndarray) -> 
     return top
 
 
-def _deposit(eng: Engine, x_lo: float, x_hi: float, level_m: float, rmin: float, rmax: float,
+def _deposit(eng: Engine, x_lo: float, x_hi: float, level_m: float, template_xy: np.ndarray,
+             template_r: np.ndarray, template_w: float, template_h: float,
              rng: np.random.Generator) -> int:
-    """Drop new disks into the space between the top surface and ``level_m`` over [x_lo, x_hi].
+    """Fill the space between the top surface and ``level_m`` over [x_lo, x_hi] with disks.
 
-    The accommodation is gridded into cells of 2 r_max + gap; every cell lying wholly above
-    the local surface (and whose bottom is below ``level_m``) receives one disk at a random
-    offset (see :func:`demseis.dem.assembly.loose_grid`); the loose deposit then compacts under
-    gravity. Returns the number of disks added (appended to the engine at rest).
+    The new disks are cut from a dense settled packing (``template_*``, the run's own initial
+    pack, shifted by a random offset and repeated periodically in x): every template disk whose
+    bottom clears the local surface (the highest disk top within one r_max either side) and
+    whose centre lies below ``level_m`` is added. Starting dense matters: a loose deposit of
+    cohesive disks can stay loose (columns held by cohesion). Returns the number added.
     """
-    gap = 0.05 * rmin
-    cell = 2 * rmax + gap
-    ncol = max(int((x_hi - x_lo) / cell), 1)
+    rmax = float(template_r.max())
+    gap = 0.1 * float(template_r.min())
+    ncol = max(int(np.ceil((x_hi - x_lo) / (0.5 * rmax))), 1)
     edges = np.linspace(x_lo, x_hi, ncol + 1)
-    cell_x = edges[1] - edges[0]
     top = surface_profile(eng.pos, eng.radius, edges)
     finite = np.isfinite(top)
     if not finite.any():
         return 0
-    top[~finite] = np.min(top[finite])
-    # a disk placed in column c must clear the surface of its neighbours too
-    padded = np.concatenate([[top[0]], top, [top[-1]]])
-    floor = np.maximum(np.maximum(padded[:-2], padded[2:]), padded[1:-1])
-    cols, ys = [], []
-    for c in range(ncol):
-        y = floor[c] + 0.5 * gap
-        while y + rmin < level_m:
-            cols.append(c)
-            ys.append(y)
-            y += cell
-    m = len(cols)
-    if m == 0:
+    top[~finite] = -np.inf
+    # floor under a disk: the highest surface within +-r_max (3 columns of r_max/2 each side)
+    floor = top.copy()
+    for sft in range(1, 4):
+        floor[sft:] = np.maximum(floor[sft:], top[:-sft])
+        floor[:-sft] = np.maximum(floor[:-sft], top[sft:])
+    floor[~np.isfinite(floor)] = np.min(top[finite])
+    lowest = float(floor.min())
+    if level_m - lowest < 2 * float(template_r.min()):
         return 0
-    r = draw_radii(m, rmin, rmax, rng)
-    cols = np.asarray(cols)
-    ys = np.asarray(ys)
-    slack_x = np.maximum(cell_x - 2 * r - gap, 0.0)
-    slack_y = np.maximum(cell - 2 * r - gap, 0.0)
-    xy = np.empty((m, 2))
-    xy[:, 0] = edges[cols] + 0.5 * gap + r + rng.random(m) * slack_x
-    xy[:, 1] = ys + r + rng.random(m) * slack_y
-    eng.add_elements(xy, r)
-    return m
+    # template window: interior of the pack (away from its base and surface)
+    depth = level_m - lowest + 2 * rmax
+    y0 = max(0.5 * (template_h - depth), 2 * rmax)
+    shift = rng.uniform(0.0, template_w)
+    sel_y = (template_xy[:, 1] >= y0) & (template_xy[:, 1] < y0 + depth)
+    txy = template_xy[sel_y]
+    tr = template_r[sel_y]
+    reps = int(np.ceil((x_hi - x_lo) / template_w)) + 1
+    xs = []
+    ys = []
+    rs = []
+    for k in range(reps):
+        x = (txy[:, 0] + shift) % template_w + x_lo + k * template_w
+        y = txy[:, 1] - y0 + lowest
+        ok = (x - tr >= x_lo) & (x + tr <= x_hi) & (y <= level_m)
+        xs.append(x[ok])
+        ys.append(y[ok])
+        rs.append(tr[ok])
+    x = np.concatenate(xs)
+    y = np.concatenate(ys)
+    r = np.concatenate(rs)
+    col = np.clip(((x - x_lo) / (edges[1] - edges[0])).astype(int), 0, ncol - 1)
+    keep = y - r > floor[col] + gap
+    if not keep.any():
+        return 0
+    eng.add_elements(np.c_[x[keep], y[keep]], r[keep])
+    return int(keep.sum())
 
 
 def simulate(asm: Assembly, fault: NormalFault, material: Material = Material(), *,
@@ -223,7 +238,7 @@ def simulate(asm: Assembly, fault: NormalFault, material: Material = Material(),
             report()
             if part < 2 and sedimentation:
                 n_before = eng.n
-                added = _deposit(eng, 0.0, W + applied * cd, H, rmin, rmax, rng)
+                added = _deposit(eng, 0.0, W + applied * cd, H, xy0, asm.radius, W, H, rng)
                 if added:
                     ids = np.concatenate([ids, np.arange(next_id, next_id + added)])
                     next_id += added

@@ -21,7 +21,9 @@ class Material:
     kn_n_m : normal spring stiffness Kn.
     ks_ratio : shear stiffness as a fraction of Kn (Ks = ks_ratio * Kn).
     friction : inter-element friction coefficient mu.
-    cohesion_n : contact cohesion C0 in newtons (slider |Fs| <= C0 + mu * Fn).
+    cohesion_n : contact cohesion C0 in newtons (slider |Fs| <= C0 + mu * Fn). The default
+        5e7 N is ~10% of mu * Fn at 1 km depth: brittle near the surface, frictional at depth;
+        with C0 = 0 a 45 deg basement fault only makes a broad monocline (docs/dem.md).
     bond_strain : bond-breaking strain r0 (bond breaks when d - R > r0 * R).
     model : ``"frictional"`` (all bonds start broken) or ``"bonded"`` (bonds between initial
         neighbours).
@@ -36,7 +38,7 @@ class Material:
     kn_n_m: float = 1.0e10
     ks_ratio: float = 0.5
     friction: float = 0.4
-    cohesion_n: float = 0.0
+    cohesion_n: float = 5.0e7
     bond_strain: float = 0.02
     model: str = "frictional"
     damping_scale: float = 3.0e8

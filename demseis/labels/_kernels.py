@@ -2,7 +2,7 @@
 
 Neighbour search uses a uniform cell list (counting sort of element indices by cell). The strain
 kernel fits, per element, a least-squares deformation gradient to its neighbours' relative
-positions. The thinning kernel is the Zhang-Suen (1984) two-subiteration algorithm.
+positions. The thinning kernel is Guo-Hall (1989) two-subiteration parallel thinning.
 """
 
 from __future__ import annotations
@@ -324,13 +324,17 @@ def power_nearest(x, y, radius, inflate, x0, top, cell, nz, nx, out_index):
 
 
 @njit(cache=True)
-def zhang_suen_thin(mask):
-    """Zhang-Suen (1984) thinning of a binary image to a one-cell-wide 8-connected skeleton.
+def guo_hall_thin(mask, lut1, lut2):
+    """Guo-Hall (1989) two-subiteration parallel thinning (algorithm A1 of Lam, Lee & Suen 1992).
+
+    Unlike Zhang-Suen it keeps two-cell-thick diagonal lines and 2x2 blocks.
 
     Parameters
     ----------
-    mask : (nz, nx) uint8, 1 = foreground. Not modified. Border cells are treated as having
-        background outside the image.
+    mask : (nz, nx) uint8, 1 = foreground; not modified; outside the image is background.
+    lut1, lut2 : (256,) bool deletion tables of the two subiterations, indexed by the
+        neighbour code sum(bit_k << k) with k = 0..7 for E, NE, N, NW, W, SW, S, SE
+        (see :func:`demseis.labels.maps.guo_hall_luts`).
 
     Returns
     -------
@@ -338,10 +342,12 @@ def zhang_suen_thin(mask):
     """
     nz, nx = mask.shape
     img = np.zeros((nz + 2, nx + 2), dtype=np.uint8)
-    img[1:-1, 1:-1] = mask != 0
-    changed = True
+    for i in range(nz):
+        for j in range(nx):
+            img[i + 1, j + 1] = 1 if mask[i, j] != 0 else 0
     rem_i = np.empty(nz * nx, dtype=np.int64)
     rem_j = np.empty(nz * nx, dtype=np.int64)
+    changed = True
     while changed:
         changed = False
         for sub in range(2):
@@ -350,45 +356,14 @@ def zhang_suen_thin(mask):
                 for j in range(1, nx + 1):
                     if img[i, j] == 0:
                         continue
-                    p2 = img[i - 1, j]
-                    p3 = img[i - 1, j + 1]
-                    p4 = img[i, j + 1]
-                    p5 = img[i + 1, j + 1]
-                    p6 = img[i + 1, j]
-                    p7 = img[i + 1, j - 1]
-                    p8 = img[i, j - 1]
-                    p9 = img[i - 1, j - 1]
-                    b = p2 + p3 + p4 + p5 + p6 + p7 + p8 + p9
-                    if b < 2 or b > 6:
-                        continue
-                    a = 0
-                    if p2 == 0 and p3 == 1:
-                        a += 1
-                    if p3 == 0 and p4 == 1:
-                        a += 1
-                    if p4 == 0 and p5 == 1:
-                        a += 1
-                    if p5 == 0 and p6 == 1:
-                        a += 1
-                    if p6 == 0 and p7 == 1:
-                        a += 1
-                    if p7 == 0 and p8 == 1:
-                        a += 1
-                    if p8 == 0 and p9 == 1:
-                        a += 1
-                    if p9 == 0 and p2 == 1:
-                        a += 1
-                    if a != 1:
-                        continue
-                    if sub == 0:
-                        if p2 * p4 * p6 != 0 or p4 * p6 * p8 != 0:
-                            continue
-                    else:
-                        if p2 * p4 * p8 != 0 or p2 * p6 * p8 != 0:
-                            continue
-                    rem_i[m] = i
-                    rem_j[m] = j
-                    m += 1
+                    code = (img[i, j + 1] | (img[i - 1, j + 1] << 1) | (img[i - 1, j] << 2)
+                            | (img[i - 1, j - 1] << 3) | (img[i, j - 1] << 4)
+                            | (img[i + 1, j - 1] << 5) | (img[i + 1, j] << 6)
+                            | (img[i + 1, j + 1] << 7))
+                    if (lut1[code] if sub == 0 else lut2[code]):
+                        rem_i[m] = i
+                        rem_j[m] = j
+                        m += 1
             for q in range(m):
                 img[rem_i[q], rem_j[q]] = 0
             if m > 0:

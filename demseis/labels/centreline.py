@@ -1,6 +1,6 @@
 """Centre lines of banded masks: spur pruning and along-strike smoothing of a skeleton.
 
-The Zhang-Suen skeleton of a thresholded strain band follows the band's edges, which in a
+The skeleton of a thresholded strain band follows the band's edges, which in a
 granular assembly are stepped at the scale of the elements (3-4 cells at 10 m for 12.5-25 m
 radii). Averaging the skeleton's coordinates along its own length over a window of a few
 element diameters removes that stepping while keeping the trace where the strain is.
@@ -15,10 +15,28 @@ _EIGHT = np.ones((3, 3), dtype=bool)
 _OFFS = [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)]
 
 
-def _neighbour_count(skel: np.ndarray) -> np.ndarray:
-    k = np.ones((3, 3), dtype=np.int32)
-    k[1, 1] = 0
-    return ndimage.convolve(skel.astype(np.int32), k, mode="constant") * skel
+# the 8 neighbours in circular order N, NE, E, SE, S, SW, W, NW
+_RING = [(-1, 0), (-1, 1), (0, 1), (1, 1), (1, 0), (1, -1), (0, -1), (-1, -1)]
+
+
+def crossing_number(skel: np.ndarray) -> np.ndarray:
+    """Number of background-to-foreground transitions around each foreground cell.
+
+    1 = end point, 2 = a cell inside a line (also on a staircase corner, where a plain
+    neighbour count would say 3), >= 3 = a junction. 0 on background and isolated cells.
+    """
+    s = np.pad(np.asarray(skel, dtype=bool), 1)
+    nz, nx = skel.shape
+    ring = [s[1 + di:1 + di + nz, 1 + dj:1 + dj + nx] for di, dj in _RING]
+    cn = np.zeros((nz, nx), dtype=np.int32)
+    for q in range(8):
+        cn += (~ring[q] & ring[(q + 1) % 8]).astype(np.int32)
+    return cn * np.asarray(skel, dtype=bool)
+
+
+def _crossing_in(pixels: set, p: tuple[int, int]) -> int:
+    ring = [(p[0] + di, p[1] + dj) in pixels for di, dj in _RING]
+    return sum((not ring[q]) and ring[(q + 1) % 8] for q in range(8))
 
 
 def _trace(pixels: set, start: tuple[int, int]) -> list[tuple[int, int]]:
@@ -48,8 +66,8 @@ def prune_spurs(skel: np.ndarray, max_len: int) -> np.ndarray:
     skel = np.asarray(skel, dtype=bool).copy()
     if max_len <= 0 or not skel.any():
         return skel
-    nc = _neighbour_count(skel)
-    junction = (nc >= 3) & skel
+    cn = crossing_number(skel)
+    junction = cn >= 3
     body = skel & ~ndimage.binary_dilation(junction, structure=_EIGHT)
     lab, nlab = ndimage.label(body, structure=_EIGHT)
     if nlab == 0:
@@ -58,7 +76,7 @@ def prune_spurs(skel: np.ndarray, max_len: int) -> np.ndarray:
     near_j = ndimage.binary_dilation(junction, structure=_EIGHT, iterations=2)
     touches = np.zeros(nlab + 1, dtype=bool)
     touches[np.unique(lab[near_j & (lab > 0)])] = True
-    ends = (nc == 1) & skel
+    ends = (cn == 1) & skel
     has_end = np.zeros(nlab + 1, dtype=bool)
     has_end[np.unique(lab[ends & (lab > 0)])] = True
     drop = touches & has_end & (sizes <= max_len)
@@ -87,8 +105,7 @@ def smooth_skeleton(skel: np.ndarray, window_cells: int) -> np.ndarray:
         return skel.copy()
     half = int(window_cells) // 2
     nz, nx = skel.shape
-    nc = _neighbour_count(skel)
-    junction = (nc >= 3) & skel
+    junction = crossing_number(skel) >= 3
     body = skel & ~junction
     out = junction.copy()
     lab, nlab = ndimage.label(body, structure=_EIGHT)
@@ -101,11 +118,10 @@ def smooth_skeleton(skel: np.ndarray, window_cells: int) -> np.ndarray:
         ii = ii + sl[0].start
         jj = jj + sl[1].start
         pixels = set(zip(ii.tolist(), jj.tolist()))
-        # an end of the branch: a pixel with one neighbour inside the branch (else a cycle)
+        # an end of the branch: crossing number <= 1 inside the branch (else a cycle)
         start = None
-        for p in pixels:
-            cnt = sum((p[0] + di, p[1] + dj) in pixels for di, dj in _OFFS)
-            if cnt <= 1:
+        for p in sorted(pixels):
+            if _crossing_in(pixels, p) <= 1:
                 start = p
                 break
         if start is None:

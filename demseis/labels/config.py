@@ -98,7 +98,8 @@ class LabelConfig:
         unknown = sorted(set(table) - known)
         if unknown:
             raise ConfigError(
-                f"unknown key(s) in [labels]: {', '.join(unknown)}; allowed: {', '.join(sorted(known))}"
+                f"unknown key(s) in [labels]: {', '.join(unknown)}; "
+                f"allowed: {', '.join(sorted(known))}"
             )
         return cls(**table).validate()
 

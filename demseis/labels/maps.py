@@ -9,8 +9,10 @@ labels are pixel-aligned with it:
    free surface) are "no rock": strain 0, layer -1, never fault.
 2. optional Gaussian smoothing (``smooth_sigma_cells``) of the strain used for thresholding.
 3. fault = strain >= ``fault_threshold``; 8-connected components smaller than
-   ``min_component_cells`` dropped; with ``thickness_cells`` = t >= 1 the mask is thinned to a
-   one-cell skeleton (Zhang-Suen) and re-grown to the cells within t/2 of the skeleton.
+   ``min_component_cells`` dropped; with ``thickness_cells`` = t >= 1 small holes are filled,
+   the mask is thinned to a one-cell skeleton (Guo-Hall), short side branches are pruned, each
+   branch is moving-averaged along its length (``centreline_window_cells``) and the result is
+   re-grown to the cells within t/2 of that centre line.
 4. damage = 0 background, 1 strain >= ``damage_threshold`` (small components dropped),
    2 fault core (the fault mask).
 """
@@ -55,6 +57,11 @@ def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = 
     layer = np.asarray(snapshot.layer)
     n = xy.shape[0]
     if isinstance(strain_per_element, StrainState):
+        if not np.array_equal(strain_per_element.ids, np.asarray(snapshot.ids)):
+            raise InputError(
+                f"strain_per_element is the StrainState of snapshot {strain_per_element.index}; "
+                f"its element ids do not match those of snapshot {getattr(snapshot, 'index', '?')}"
+            )
         strain_e = strain_per_element.measure(cfg.strain_measure)
     else:
         strain_e = np.asarray(strain_per_element, dtype=np.float64)
@@ -68,8 +75,9 @@ def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = 
     rock = owner >= 0
     layer_map = np.full(grid.shape, -1, dtype=np.int16)
     layer_map[rock] = layer[owner[rock]].astype(np.int16)
-    fault = fault_mask(strain, cfg, rock=rock)
-    damage = damage_map(strain, fault, cfg, rock=rock)
+    smoothed = _smoothed(strain, cfg.smooth_sigma_cells, rock)
+    fault = fault_mask(strain, cfg, rock=rock, smoothed=smoothed)
+    damage = damage_map(strain, fault, cfg, rock=rock, smoothed=smoothed)
     return {"fault": fault, "damage": damage, "strain": strain.astype(np.float32),
             "layer": layer_map}
 
@@ -124,7 +132,7 @@ def rasterise_strain(xy: np.ndarray, radius: np.ndarray, values: np.ndarray,
 
 
 def fault_mask(strain: np.ndarray, config: LabelConfig | None = None,
-               rock: np.ndarray | None = None) -> np.ndarray:
+               rock: np.ndarray | None = None, smoothed: np.ndarray | None = None) -> np.ndarray:
     """Binary fault mask from a rasterised strain field.
 
     Parameters
@@ -132,13 +140,14 @@ def fault_mask(strain: np.ndarray, config: LabelConfig | None = None,
     strain : (nz, nx) float gamma_max on the grid.
     config : thresholds, smoothing, minimum component size and thickness control.
     rock : (nz, nx) bool, cells inside the rock (default: all); the mask is 0 elsewhere.
+    smoothed : the strain already smoothed with ``config.smooth_sigma_cells`` (optional).
 
     Returns
     -------
     (nz, nx) uint8, 1 = fault.
     """
     cfg = (config or LabelConfig()).validate()
-    s = _smoothed(strain, cfg.smooth_sigma_cells, rock)
+    s = _smoothed(strain, cfg.smooth_sigma_cells, rock) if smoothed is None else smoothed
     mask = s >= cfg.fault_threshold
     if rock is not None:
         mask &= rock
@@ -152,7 +161,7 @@ def fault_mask(strain: np.ndarray, config: LabelConfig | None = None,
 
 
 def damage_map(strain: np.ndarray, fault: np.ndarray, config: LabelConfig | None = None,
-               rock: np.ndarray | None = None) -> np.ndarray:
+               rock: np.ndarray | None = None, smoothed: np.ndarray | None = None) -> np.ndarray:
     """Three-class map: 0 background, 1 damage zone (strain >= damage_threshold), 2 fault core.
 
     Parameters
@@ -161,9 +170,10 @@ def damage_map(strain: np.ndarray, fault: np.ndarray, config: LabelConfig | None
     fault : (nz, nx) fault mask (nonzero = fault core), e.g. from :func:`fault_mask`.
     config : ``damage_threshold``, ``smooth_sigma_cells``, ``min_component_cells``.
     rock : (nz, nx) bool cells inside the rock (default: all).
+    smoothed : the strain already smoothed with ``config.smooth_sigma_cells`` (optional).
     """
     cfg = (config or LabelConfig()).validate()
-    s = _smoothed(strain, cfg.smooth_sigma_cells, rock)
+    s = _smoothed(strain, cfg.smooth_sigma_cells, rock) if smoothed is None else smoothed
     dz = s >= cfg.damage_threshold
     if rock is not None:
         dz &= rock
@@ -204,7 +214,7 @@ def thin_and_dilate(mask: np.ndarray, thickness_cells: float, window_cells: int 
                     prune_cells: int = 0) -> np.ndarray:
     """Thin ``mask`` to a centre line, then keep the cells within ``thickness_cells / 2`` of it.
 
-    Steps: Zhang-Suen skeleton; spurs of at most ``prune_cells`` cells (end point to junction)
+    Steps: Guo-Hall skeleton; spurs of at most ``prune_cells`` cells (end point to junction)
     removed; branch coordinates moving-averaged over ``window_cells`` cells along the branch
     (see :mod:`demseis.labels.centreline`); band of cells whose centre lies within
     ``thickness_cells / 2`` of the centre line (``thickness_cells <= 1``: the line itself).
@@ -234,7 +244,7 @@ def thin_and_dilate(mask: np.ndarray, thickness_cells: float, window_cells: int 
     # holes enclosed by the band (a low-strain grain inside a shear band) would become loops of
     # the skeleton; fill those up to window_cells^2 / 2 cells
     padded = fill_small_holes(padded, max(int(window_cells) ** 2 // 2, 8))
-    skel = _kernels.zhang_suen_thin(padded.astype(np.uint8)).astype(bool)
+    skel = _skeleton(padded)
     if prune_cells > 0:
         skel = prune_spurs(skel, int(prune_cells))
     if window_cells > 1:
@@ -242,6 +252,39 @@ def thin_and_dilate(mask: np.ndarray, thickness_cells: float, window_cells: int 
     if thickness_cells > 1.0 and skel.any():
         skel = ndimage.distance_transform_edt(~skel) <= 0.5 * thickness_cells
     return skel[pad:-pad, pad:-pad]
+
+
+def guo_hall_luts() -> tuple[np.ndarray, np.ndarray]:
+    """Deletion tables of the two Guo-Hall subiterations over the 256 neighbour codes.
+
+    Bits 0..7 of a code are the neighbours E, NE, N, NW, W, SW, S, SE (x1..x8). A cell is
+    deleted when C(p) = sum_i [!x(2i-1) and (x(2i) or x(2i+1))] = 1, 2 <= min(N1, N2) <= 3 and
+    (x2 or x3 or !x8) and x1 = 0 (first subiteration) / (x6 or x7 or !x4) and x5 = 0 (second).
+    """
+    lut1 = np.zeros(256, dtype=np.bool_)
+    lut2 = np.zeros(256, dtype=np.bool_)
+    for code in range(256):
+        b = [(code >> k) & 1 == 1 for k in range(8)]
+        c = sum((not b[i]) and (b[i + 1] or b[(i + 2) % 8]) for i in (0, 2, 4, 6))
+        n1 = sum(b[k] or b[k - 1] for k in (1, 3, 5, 7))
+        n2 = sum(b[k] or b[(k + 1) % 8] for k in (1, 3, 5, 7))
+        g12 = c == 1 and 2 <= min(n1, n2) <= 3
+        lut1[code] = g12 and not ((b[1] or b[2] or not b[7]) and b[0])
+        lut2[code] = g12 and not ((b[5] or b[6] or not b[3]) and b[4])
+    return lut1, lut2
+
+
+_LUT1, _LUT2 = guo_hall_luts()
+
+
+def skeletonize(mask: np.ndarray) -> np.ndarray:
+    """One-cell-wide skeleton of a binary mask (Guo-Hall thinning, Numba kernel)."""
+    m = np.ascontiguousarray(np.asarray(mask, dtype=bool).astype(np.uint8))
+    return _kernels.guo_hall_thin(m, _LUT1, _LUT2).astype(bool)
+
+
+def _skeleton(mask: np.ndarray) -> np.ndarray:
+    return skeletonize(mask)
 
 
 def fill_small_holes(mask: np.ndarray, max_cells: int) -> np.ndarray:
@@ -261,7 +304,7 @@ def fill_small_holes(mask: np.ndarray, max_cells: int) -> np.ndarray:
 def mask_thickness_cells(mask: np.ndarray) -> float:
     """Mean thickness of a banded mask in cells: area / centre-line length.
 
-    The centre line is the Zhang-Suen skeleton; its length sums the links between 8-connected
+    The centre line is the Guo-Hall skeleton; its length sums the links between 8-connected
     skeleton cells (1 for side neighbours, sqrt 2 for diagonal ones, each link once). Returns
     NaN for an empty mask.
     """
@@ -270,8 +313,7 @@ def mask_thickness_cells(mask: np.ndarray) -> float:
         return float("nan")
     dist = ndimage.distance_transform_edt(mask)
     pad = int(np.ceil(dist.max())) + 2
-    skel = _kernels.zhang_suen_thin(np.pad(mask, pad, mode="edge").astype(np.uint8))
-    skel = skel[pad:-pad, pad:-pad].astype(bool)
+    skel = _skeleton(np.pad(mask, pad, mode="edge"))[pad:-pad, pad:-pad]
     length = skeleton_length_cells(skel)
     if length <= 0:
         return float(mask.sum())

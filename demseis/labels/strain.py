@@ -79,7 +79,8 @@ def neighbour_lists(
 
     Returns
     -------
-    offsets : (n + 1,) int64; index : (m,) int64. Neighbours of i: ``index[offsets[i]:offsets[i+1]]``.
+    offsets : (n + 1,) int64; index : (m,) int64.
+        Neighbours of i: ``index[offsets[i]:offsets[i+1]]``.
     """
     xy, radii = _check_xy_radii(xy, radii, "xy")
     x = np.ascontiguousarray(xy[:, 0])
@@ -249,15 +250,42 @@ def strain_history(
     kw = dict(method=cfg.neighbour_method, radius_factor=cfg.neighbour_radius_factor,
               k=cfg.neighbour_k)
     out: list[StrainState] = []
-    # first appearance (snapshot position) of each id
-    first_seen: dict[int, int] = {}
+    # neighbour lists of each snapshot's full element set, reused while no element is lost
+    cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def lists_of(t: int, in_ref: np.ndarray, full: bool):
+        ref = snaps[t]
+        if full:
+            if t not in cache:
+                cache[t] = neighbour_lists(ref.xy, ref.radius, **kw)
+            return cache[t]
+        return neighbour_lists(ref.xy[in_ref], ref.radius[in_ref], **kw)
+
+    def fit(t: int, cur_snap) -> tuple[np.ndarray, np.ndarray, StrainResult]:
+        ref = snaps[t]
+        in_ref, in_cur, full = _match(np.asarray(ref.ids), np.asarray(cur_snap.ids))
+        offsets, index = lists_of(t, in_ref, full)
+        res = _strain_from_lists(np.ascontiguousarray(ref.xy[in_ref], dtype=np.float64),
+                                 np.ascontiguousarray(cur_snap.xy[in_cur], dtype=np.float64),
+                                 offsets, index, cfg.min_neighbours)
+        return in_ref, in_cur, res
+
+    seen_ids = np.empty(0, dtype=np.int64)  # sorted ids seen so far
+    seen_birth = np.empty(0, dtype=np.int64)  # their first snapshot position
     prev_cum: np.ndarray | None = None
     for k_pos, snap in enumerate(snaps):
         ids = np.asarray(snap.ids, dtype=np.int64)
         n = ids.shape[0]
-        birth = np.empty(n, dtype=np.int64)
-        for e, i in enumerate(ids.tolist()):
-            birth[e] = first_seen.setdefault(i, k_pos)
+        pos = np.searchsorted(seen_ids, ids)
+        known = pos < seen_ids.shape[0]
+        known[known] = seen_ids[pos[known]] == ids[known]
+        birth = np.full(n, k_pos, dtype=np.int64)
+        birth[known] = seen_birth[pos[known]]
+        if (~known).any():
+            all_ids = np.concatenate([seen_ids, ids[~known]])
+            all_birth = np.concatenate([seen_birth, birth[~known]])
+            order = np.argsort(all_ids, kind="stable")
+            seen_ids, seen_birth = all_ids[order], all_birth[order]
         total = np.zeros(n)
         total_vol = np.zeros(n)
         valid = np.ones(n, dtype=bool)
@@ -265,11 +293,7 @@ def strain_history(
         for t in np.unique(birth):
             if t == k_pos:
                 continue  # born now: zero strain against itself
-            ref = snaps[t]
-            _, in_ref, in_cur = np.intersect1d(ref.ids, ids, assume_unique=True,
-                                               return_indices=True)
-            res = _fit(ref.xy[in_ref], snap.xy[in_cur], ref.radius[in_ref], kw,
-                       cfg.min_neighbours)
+            _, in_cur, res = fit(int(t), snap)
             sel = birth[in_cur] == t
             tgt = in_cur[sel]
             total[tgt] = res.gamma_max[sel]
@@ -278,11 +302,7 @@ def strain_history(
         incr = np.zeros(n)
         cum = np.zeros(n)
         if k_pos > 0:
-            prev = snaps[k_pos - 1]
-            _, in_prev, in_cur = np.intersect1d(prev.ids, ids, assume_unique=True,
-                                                return_indices=True)
-            res = _fit(prev.xy[in_prev], snap.xy[in_cur], prev.radius[in_prev], kw,
-                       cfg.min_neighbours)
+            in_prev, in_cur, res = fit(k_pos - 1, snap)
             incr[in_cur] = res.gamma_max
             add = np.where(res.valid, res.gamma_max, 0.0)
             cum[in_cur] = prev_cum[in_prev] + add
@@ -293,11 +313,20 @@ def strain_history(
     return out
 
 
-def _fit(ref_xy, cur_xy, radii, kw, min_neighbours) -> StrainResult:
-    ref = np.ascontiguousarray(ref_xy, dtype=np.float64)
-    cur = np.ascontiguousarray(cur_xy, dtype=np.float64)
-    offsets, index = neighbour_lists(ref, np.ascontiguousarray(radii, dtype=np.float64), **kw)
-    return _strain_from_lists(ref, cur, offsets, index, min_neighbours)
+def _match(ref_ids: np.ndarray, cur_ids: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Positions of the common ids: ``ref_ids[in_ref] == cur_ids[in_cur]``, in reference order.
+
+    ``full`` is True when every reference id is present in ``cur_ids`` (then in_ref = arange).
+    """
+    order = np.argsort(cur_ids, kind="stable")
+    sorted_cur = cur_ids[order]
+    pos = np.searchsorted(sorted_cur, ref_ids)
+    pos_c = np.minimum(pos, max(sorted_cur.shape[0] - 1, 0))
+    found = (pos < sorted_cur.shape[0]) & (sorted_cur[pos_c] == ref_ids) if sorted_cur.size \
+        else np.zeros(ref_ids.shape[0], dtype=bool)
+    in_ref = np.nonzero(found)[0]
+    in_cur = order[pos_c[found]]
+    return in_ref, in_cur, bool(found.all())
 
 
 def _check_snapshot(s, pos: int) -> None:

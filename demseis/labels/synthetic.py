@@ -44,7 +44,8 @@ def disk_pack(
     xy : (n, 2) float64 centres (m, y up); radius : (n,) float64 radii (m).
     """
     if not (0 < radius_min_m <= radius_max_m):
-        raise InputError(f"radius range [{radius_min_m}, {radius_max_m}] invalid; need 0 < min <= max")
+        raise InputError(f"radius range [{radius_min_m}, {radius_max_m}] invalid; "
+                         "need 0 < min <= max")
     if width_m <= 4 * radius_max_m or height_m <= 4 * radius_max_m:
         raise InputError(f"box {width_m} x {height_m} m too small for radius_max_m={radius_max_m}")
     if not (0.3 < packing_fraction < 0.95):

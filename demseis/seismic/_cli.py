@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 
 
@@ -31,6 +32,8 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     b.add_argument("--nx", type=int, default=512, help="grid columns (default 512)")
     b.add_argument("--nz", type=int, default=288, help="grid rows (default 288)")
     b.add_argument("--repeats", type=int, default=7, help="timed repeats, median (default 7)")
+    b.add_argument("--npz", help="render the last snapshot of this .npz (e.g. saved from a DEM "
+                                 "run) instead of the kinematic toy pack")
     b.set_defaults(func=_bench_seismic)
 
 
@@ -49,5 +52,7 @@ def _bench_seismic(args: argparse.Namespace) -> int:
     for name in ("nx", "nz", "repeats"):
         if getattr(args, name) < 1:
             raise InputError(f"--{name} must be >= 1, got {getattr(args, name)}")
-    print(json.dumps(run_benchmark(nx=args.nx, nz=args.nz, repeats=args.repeats)))
+    if args.npz is not None and not os.path.isfile(args.npz):
+        raise InputError(f"--npz {args.npz!r} is not a file")
+    print(json.dumps(run_benchmark(nx=args.nx, nz=args.nz, repeats=args.repeats, npz=args.npz)))
     return 0

@@ -56,6 +56,25 @@ def rasterise_sum(x, y, radius, values, x0, top, cell, nz, nx, out_sum, out_coun
 
 
 @njit(cache=True)
+def divide_by_count(out_sum, count):
+    """In place: ``out_sum[i, j, :] /= count[i, j]``, NaN where ``count[i, j] == 0``.
+
+    out_sum : (nz, nx, k) float64; count : (nz, nx) int32.
+    """
+    nz, nx, k = out_sum.shape
+    for i in range(nz):
+        for j in range(nx):
+            c = count[i, j]
+            if c == 0:
+                for q in range(k):
+                    out_sum[i, j, q] = np.nan
+            elif c > 1:
+                inv = 1.0 / c
+                for q in range(k):
+                    out_sum[i, j, q] *= inv
+
+
+@njit(cache=True)
 def correlate_rows_cols(a, weights, out):
     """Separable correlation with a symmetric 1-D kernel along both axes, edge-replicated.
 
@@ -177,7 +196,7 @@ def convolve_spikes(t_spike, amp, t_out, tables, inv_step, half_s, out):
 
     For every wavelet f, column c and output time t = t_out[c, q]::
 
-        out[f, c, q] = sum_i amp[c, i] * w_f(t - t_spike[c, i])      over |t - t_spike| <= half_s[f]
+        out[f, c, q] = sum_i amp[c, i] * w_f(t - t_spike[c, i])      over |t - t_spike| < half_s[f]
 
     which is equation (6) of the paper, s(t) = (r * w)(t), for r(t) = sum_i a_i delta(t - t_i),
     evaluated exactly at arbitrary (non-uniform) output times: no resampling of reflectivity.
@@ -188,10 +207,13 @@ def convolve_spikes(t_spike, amp, t_out, tables, inv_step, half_s, out):
     amp : (nx, m) float64 spike amplitudes (reflection coefficients).
     t_out : (nx, k) float64 output times per column (s), ascending.
     tables : (nf, ntab) float64, ``tables[f, p] = w_f(p / inv_step[f])`` for p = 0..ntab-1, the
-        even wavelet tabulated on [0, half_s[f]]; linear interpolation between entries.
+        even wavelet tabulated on [0, half_s[f]] (``ntab - 1`` steps); linear interpolation.
     inv_step : (nf,) float64 reciprocal of the table step (1/s).
     half_s : (nf,) float64 wavelet half-width (s); beyond it the wavelet is taken as zero.
     out : (nf, nx, k) float64 output, written.
+
+    The spikes within the window of each output are found with two moving pointers (both time
+    series ascend), then summed in a branch-free loop.
     """
     nx, m = t_spike.shape
     k = t_out.shape[1]
@@ -200,26 +222,26 @@ def convolve_spikes(t_spike, amp, t_out, tables, inv_step, half_s, out):
     for f in range(nf):
         hw = half_s[f]
         ih = inv_step[f]
+        tab = tables[f]
         for c in range(nx):
+            ts = t_spike[c]
+            a = amp[c]
             lo = 0
+            hi = 0
             for q in range(k):
                 t = t_out[c, q]
-                while lo < m and t_spike[c, lo] < t - hw:
+                while lo < m and ts[lo] <= t - hw:
                     lo += 1
+                if hi < lo:
+                    hi = lo
+                while hi < m and ts[hi] < t + hw:
+                    hi += 1
                 s = 0.0
-                i = lo
-                while i < m:
-                    tau = t - t_spike[c, i]
-                    if tau < -hw:
-                        break
-                    if tau < 0.0:
-                        tau = -tau
-                    u = tau * ih
-                    p = int(u)
-                    if p < ntab - 1:
-                        w0 = tables[f, p]
-                        s += amp[c, i] * (w0 + (u - p) * (tables[f, p + 1] - w0))
-                    i += 1
+                for i in range(lo, hi):
+                    u = abs(t - ts[i]) * ih
+                    p = min(int(u), ntab - 2)
+                    w0 = tab[p]
+                    s += a[i] * (w0 + (u - p) * (tab[p + 1] - w0))
                 out[f, c, q] = s
 
 
@@ -250,40 +272,96 @@ def containing_cell(t_bottom, t_s, out):
 
 
 @njit(cache=True)
-def nearest_element(x, y, x0, top, cell, nz, nx, search_m, want, out_d2, out_index):
-    """Nearest element centre of every wanted cell, among elements within ``search_m``.
+def _nearest_one(px, py, x, y, order, start, bx0, by0, bsize, nbx, nby):
+    """Index of the element centre nearest to (px, py); see :func:`nearest_element_cells`."""
+    bx = int(np.floor((px - bx0) / bsize))
+    by = int(np.floor((py - by0) / bsize))
+    r_max = max(max(bx, nbx - 1 - bx), max(by, nby - 1 - by)) + 1
+    fx = px - (bx0 + bx * bsize)
+    fy = py - (by0 + by * bsize)
+    d_edge = min(min(fx, bsize - fx), min(fy, bsize - fy))
+    if d_edge < 0.0:
+        d_edge = 0.0
+    best = np.inf
+    bi = -1
+    ring = 0
+    while True:
+        for dy in range(-ring, ring + 1):
+            iy = by + dy
+            if iy < 0 or iy >= nby:
+                continue
+            step = 1 if (ring == 0 or dy == -ring or dy == ring) else 2 * ring
+            dx = -ring
+            while dx <= ring:
+                ix = bx + dx
+                if 0 <= ix < nbx:
+                    b = iy * nbx + ix
+                    for k in range(start[b], start[b + 1]):
+                        e = order[k]
+                        ddx = x[e] - px
+                        ddy = y[e] - py
+                        d2 = ddx * ddx + ddy * ddy
+                        if d2 < best or (d2 == best and e < bi):
+                            best = d2
+                            bi = e
+                dx += step
+        lim = ring * bsize + d_edge
+        if (bi >= 0 and best <= lim * lim) or ring >= r_max:
+            return bi
+        ring += 1
+
+
+@njit(cache=True)
+def nearest_element_cells(x, y, order, start, bx0, by0, bsize, nbx, nby, cx, cy, out_index):
+    """Index of the element centre nearest to each query point (exact), via a bucket grid.
 
     Parameters
     ----------
-    x, y : (n,) float64 element centres (m), y up.
-    x0, top, cell, nz, nx : the grid (left edge, top elevation, cell size in m, rows, columns).
-    search_m : search radius (m); cells with no element centre that close keep index -1.
-    want : (nz, nx) bool, cells to process (e.g. the empty ones).
-    out_d2 : (nz, nx) float64, set to +inf by the caller; squared distance (m^2) to the nearest.
-    out_index : (nz, nx) int64, set to -1 by the caller; index of the nearest element.
+    x, y : (n,) float64 element centres (m).
+    order : (n,) int64 element indices sorted by bucket key ``by * nbx + bx``.
+    start : (nbx * nby + 1,) int64, elements of bucket b are ``order[start[b]:start[b + 1]]``.
+    bx0, by0, bsize : lower-left corner and side (m) of the bucket grid (covers all centres).
+    nbx, nby : buckets along x and y.
+    cx, cy : (m,) float64 query points (m), e.g. cell centres; anywhere, even off the buckets.
+    out_index : (m,) int64 output, written.
 
-    Ties keep the lower element index, so the result is the same as a brute-force search.
+    Buckets are searched ring by ring around the query's bucket; after ring R every
+    unexamined element is at least R * bsize + d_edge away (d_edge: distance from the query to
+    the edge of its own bucket), so the search stops once the best distance is within that.
+    Ties keep the lowest element index (as a brute-force argmin).
     """
-    n = x.shape[0]
-    s2 = search_m * search_m
-    for e in range(n):
-        fj0 = np.ceil((x[e] - search_m - x0) / cell - 0.5) - 1.0
-        fj1 = np.floor((x[e] + search_m - x0) / cell - 0.5) + 1.0
-        fi0 = np.ceil((top - (y[e] + search_m)) / cell - 0.5) - 1.0
-        fi1 = np.floor((top - (y[e] - search_m)) / cell - 0.5) + 1.0
-        if fj1 < 0.0 or fi1 < 0.0 or fj0 > nx - 1.0 or fi0 > nz - 1.0:
-            continue
-        j0 = max(int(fj0), 0)
-        j1 = min(int(fj1), nx - 1)
-        i0 = max(int(fi0), 0)
-        i1 = min(int(fi1), nz - 1)
-        for i in range(i0, i1 + 1):
-            dy = top - (i + 0.5) * cell - y[e]
-            for j in range(j0, j1 + 1):
-                if not want[i, j]:
-                    continue
-                dx = x0 + (j + 0.5) * cell - x[e]
-                d2 = dx * dx + dy * dy
-                if d2 <= s2 and d2 < out_d2[i, j]:
-                    out_d2[i, j] = d2
-                    out_index[i, j] = e
+    for q in range(cx.shape[0]):
+        out_index[q] = _nearest_one(cx[q], cy[q], x, y, order, start, bx0, by0, bsize, nbx, nby)
+
+
+@njit(cache=True)
+def fill_empty_from_layer(mean, count, x, y, order, start, bx0, by0, bsize, nbx, nby,
+                          x0, top, cell, layer, layer_mean):
+    """In place: every empty cell (count 0) of ``mean`` takes the mean values of the layer of
+    the element whose centre is nearest to the cell centre.
+
+    mean : (nz, nx, k) float64; count : (nz, nx) int32; x, y, order, start, bx0, by0, bsize,
+    nbx, nby : the bucket grid of :func:`nearest_element_cells`; x0, top, cell : the grid (m);
+    layer : (n,) int64 layer of each element; layer_mean : (L, k) float64 per-layer means.
+    """
+    nz, nx, k = mean.shape
+    for i in range(nz):
+        py = top - (i + 0.5) * cell
+        for j in range(nx):
+            if count[i, j] == 0:
+                e = _nearest_one(x0 + (j + 0.5) * cell, py, x, y, order, start, bx0, by0, bsize,
+                                 nbx, nby)
+                L = layer[e]
+                for q in range(k):
+                    mean[i, j, q] = layer_mean[L, q]
+
+
+@njit(cache=True)
+def fill_empty_constant(mean, count, value):
+    """In place: every empty cell (count 0) of ``mean`` (nz, nx, k) takes ``value`` (k,)."""
+    nz, nx, k = mean.shape
+    for i in range(nz):
+        for j in range(nx):
+            if count[i, j] == 0:
+                for q in range(k):
+                    mean[i, j, q] = value[q]

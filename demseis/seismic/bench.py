@@ -20,17 +20,20 @@ from demseis.seismic.properties import (
 from demseis.seismic.raster import rasterise
 
 
-def _median_ms(fn, repeats: int) -> float:
-    times = []
+def _median_ms(fn, repeats: int) -> tuple[float, float]:
+    """Median wall-clock and process-CPU milliseconds of ``fn()`` over ``repeats`` calls."""
+    wall, cpu = [], []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times) * 1e3)
+        wall.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
+    return float(np.median(wall) * 1e3), float(np.median(cpu) * 1e3)
 
 
 def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: int = 7,
-                  freqs_hz: tuple[float, ...] = (20.0, 40.0, 60.0), seed: int = 0) -> dict:
+                  freqs_hz: tuple[float, ...] = (20.0, 40.0, 60.0), seed: int = 0,
+                  npz: str | None = None) -> dict:
     """Time the render of one faulted toy snapshot (``nx`` x ``nz`` cells of ``cell_m``).
 
     The snapshot is the last (throw 450 m) of :func:`demseis.seismic.demo.faulted_sequence`
@@ -43,7 +46,14 @@ def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: i
     """
     rng = np.random.default_rng(seed)
     width, height = nx * cell_m, nz * cell_m
-    snap = faulted_sequence(width, height, rng=rng)[-1]
+    if npz is None:
+        snap = faulted_sequence(width, height, rng=rng)[-1]
+        source = "kinematic toy sequence, last snapshot"
+    else:
+        from demseis.seismic.figures import load_snapshots
+
+        snap = load_snapshots(npz)[-1]
+        source = f"{npz}, last snapshot"
     grid = Grid.covering(width, height, cell_m)
     model = PropertyModel().validate()
     lp = draw_layer_properties(int(snap.layer.max()) + 1, model, rng)
@@ -78,6 +88,7 @@ def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: i
         return synthetic_sections(vg, rg, cell_m, freqs)
 
     render(freqs_hz)  # warm-up: Numba compilation / cache load
+    nf = len(freqs_hz)
     comp = {
         "element_properties": _median_ms(props, repeats),
         "rasterise": _median_ms(rast, repeats),
@@ -85,7 +96,7 @@ def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: i
         "smooth_vp_rho": _median_ms(smoothing, repeats),
         "convolution_1f": _median_ms(lambda: synthetic_sections(vp_g, rho_g, cell_m, f1),
                                      repeats),
-        f"convolution_{len(freqs_hz)}f": _median_ms(
+        f"convolution_{nf}f": _median_ms(
             lambda: synthetic_sections(vp_g, rho_g, cell_m, freqs_hz), repeats),
     }
     full1 = _median_ms(lambda: render(f1), repeats)
@@ -95,13 +106,17 @@ def run_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: i
         "nz": grid.nz,
         "nx": grid.nx,
         "cell_m": cell_m,
-        "n_elements": snap.n,
+        "snapshot": source,
+        "n_elements": int(snap.ids.shape[0]),
         "freqs_hz": list(freqs_hz),
         "repeats": repeats,
-        "numba_threads": int(os.environ.get("NUMBA_NUM_THREADS", "0")) or None,
-        "ms_snapshot_1f": round(full1, 2),
-        f"ms_snapshot_{len(freqs_hz)}f": round(fulln, 2),
-        "ms_per_section_1f": round(full1, 2),
-        f"ms_per_section_{len(freqs_hz)}f": round(fulln / len(freqs_hz), 2),
-        "components_ms": {k: round(v, 2) for k, v in comp.items()},
+        "loadavg_1min": round(os.getloadavg()[0], 2),
+        "ms_snapshot_1f": round(full1[0], 2),
+        f"ms_snapshot_{nf}f": round(fulln[0], 2),
+        "ms_per_section_1f": round(full1[0], 2),
+        f"ms_per_section_{nf}f": round(fulln[0] / nf, 2),
+        "cpu_ms_snapshot_1f": round(full1[1], 2),
+        f"cpu_ms_snapshot_{nf}f": round(fulln[1], 2),
+        "components_ms": {k: round(v[0], 2) for k, v in comp.items()},
+        "components_cpu_ms": {k: round(v[1], 2) for k, v in comp.items()},
     }

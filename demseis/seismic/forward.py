@@ -110,7 +110,8 @@ def convolve(trace: np.ndarray, wavelet: np.ndarray, axis: int = -1) -> np.ndarr
     return out[0] if w.ndim == 1 else out
 
 
-def _check_grids(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float) -> tuple[np.ndarray, np.ndarray]:
+def _check_grids(vp_g: np.ndarray, rho_g: np.ndarray,
+                 cell_m: float) -> tuple[np.ndarray, np.ndarray]:
     vp = np.asarray(vp_g, dtype=np.float64)
     rho = np.asarray(rho_g, dtype=np.float64)
     if vp.ndim != 2 or vp.shape != rho.shape:
@@ -148,15 +149,25 @@ def interface_times(vp_g: np.ndarray, cell_m: float) -> tuple[np.ndarray, np.nda
 
 
 def time_axis(nz: int, cell_m: float, vp_min_m_s: float, dt_s: float = 0.002) -> np.ndarray:
-    """A regular TWT axis long enough for any section of ``nz`` cells slower than nothing below
-    ``vp_min_m_s``.
+    """A regular two-way-time axis long enough for any ``nz``-cell column with Vp >= vp_min_m_s.
 
-    ``t_s = k dt_s`` for ``k = 0 .. ceil(2 nz cell / (vp_min dt)) `` : the deepest cell bottom
-    of any column is at most ``2 nz cell / vp_min``. With ``vp_min_m_s =
+    ``t_s = k dt_s`` for ``k = 0 .. ceil(2 nz cell / (vp_min dt))``: the deepest cell bottom
+    of any such column is at most ``2 nz cell / vp_min``. With ``vp_min_m_s =
     PropertyModel.vp_lower_bound_m_s`` (the smallest Vp any element or smoothed cell can take),
     the axis depends only on the grid, the property model and ``dt_s``, so every sample of a
     sweep shares one time-domain shape. Samples below a column's deepest interface are still
     computed (the wavelet tail), then zero.
+
+    Parameters
+    ----------
+    nz : rows of the grid.
+    cell_m : cell size (m).
+    vp_min_m_s : the smallest Vp any cell can have (m/s).
+    dt_s : sample interval (s); 2 ms resolves Rickers up to ~60-80 Hz (Nyquist 250 Hz).
+
+    Returns
+    -------
+    (nt,) float64 times (s), starting at 0 (the grid top).
     """
     if not (isinstance(nz, (int, np.integer)) and nz > 0):
         raise InputError(f"nz must be a positive integer, got {nz!r}")

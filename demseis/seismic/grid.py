@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from demseis.errors import InputError
+
 
 @dataclass(frozen=True)
 class Grid:
@@ -29,9 +31,25 @@ class Grid:
     nz: int
     nx: int
 
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.cell_m) and self.cell_m > 0):
+            raise InputError(f"Grid cell_m must be a finite size > 0 m, got {self.cell_m!r}")
+        if not (np.isfinite(self.x0_m) and np.isfinite(self.top_m)):
+            raise InputError(f"Grid x0_m and top_m must be finite, got {self.x0_m!r}, "
+                             f"{self.top_m!r}")
+        for name in ("nz", "nx"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise InputError(f"Grid {name} must be an integer >= 1, got {v!r}")
+
     @classmethod
     def covering(cls, width_m: float, height_m: float, cell_m: float = 10.0) -> "Grid":
         """The grid over the box ``[0, width_m] x [0, height_m]`` (cells that fit whole)."""
+        if not (np.isfinite(cell_m) and cell_m > 0):
+            raise InputError(f"Grid cell_m must be a finite size > 0 m, got {cell_m!r}")
+        if not (np.isfinite(width_m) and np.isfinite(height_m) and width_m > 0 and height_m > 0):
+            raise InputError(f"Grid.covering needs width_m, height_m > 0, got {width_m!r}, "
+                             f"{height_m!r}")
         nx = max(1, int(np.floor(width_m / cell_m + 1e-9)))
         nz = max(1, int(np.floor(height_m / cell_m + 1e-9)))
         return cls(x0_m=0.0, top_m=float(height_m), cell_m=float(cell_m), nz=nz, nx=nx)

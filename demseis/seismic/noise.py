@@ -21,7 +21,10 @@ def rms(a: np.ndarray, axis=None) -> np.ndarray:
 
 
 def snr_db(signal: np.ndarray, noisy: np.ndarray) -> float:
-    """Measured SNR (dB) of ``noisy`` against the clean ``signal``: 20 log10(rms(s)/rms(noisy - s))."""
+    """Measured SNR (dB) of ``noisy`` against the clean ``signal``.
+
+    20 log10(rms(s) / rms(noisy - s)).
+    """
     s = np.asarray(signal, dtype=np.float64)
     n = np.asarray(noisy, dtype=np.float64) - s
     return 20.0 * math.log10(rms(s) / rms(n))

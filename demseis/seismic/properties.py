@@ -98,7 +98,8 @@ class PropertyModel:
             raise ConfigError(f"properties.lithologies = {self.lithologies!r}: allowed is a list "
                               "of 1 to 16 non-empty names")
         if len(set(self.lithologies)) != n:
-            raise ConfigError(f"properties.lithologies = {self.lithologies!r}: names must be unique")
+            raise ConfigError(f"properties.lithologies = {self.lithologies!r}: names must be "
+                              "unique")
         per_lith = {
             "lithology_weights": (0.0, float("inf")),
             "vp_min_m_s": (1200.0, 8000.0),
@@ -296,30 +297,41 @@ def smooth(field: np.ndarray, model: PropertyModel) -> np.ndarray:
     return a
 
 
+def _buckets(xy: np.ndarray, grid: Grid, bucket_m: float | None):
+    """Bucket grid of element centres for the nearest-element search."""
+    x = np.ascontiguousarray(xy[:, 0], dtype=np.float64)
+    y = np.ascontiguousarray(xy[:, 1], dtype=np.float64)
+    x_lo, y_lo = float(x.min()), float(y.min())
+    span_x = float(x.max()) - x_lo
+    span_y = float(y.max()) - y_lo
+    if bucket_m is None:
+        spacing = np.sqrt(max(span_x * span_y, 1.0) / x.size)
+        bucket_m = max(spacing, grid.cell_m)
+    nbx = int(span_x // bucket_m) + 1
+    nby = int(span_y // bucket_m) + 1
+    key = (np.floor((y - y_lo) / bucket_m).astype(np.int64) * nbx
+           + np.floor((x - x_lo) / bucket_m).astype(np.int64))
+    order = np.argsort(key, kind="stable").astype(np.int64)
+    start = np.searchsorted(key[order], np.arange(nbx * nby + 1)).astype(np.int64)
+    return x, y, order, start, x_lo, y_lo, float(bucket_m), nbx, nby
+
+
 def nearest_element_index(xy: np.ndarray, grid: Grid, want: np.ndarray,
-                          search_m: float | None = None) -> np.ndarray:
+                          bucket_m: float | None = None) -> np.ndarray:
     """Index of the element whose centre is nearest to each wanted cell centre (-1 elsewhere).
 
-    A Numba pass finds it among the elements within ``search_m`` (default 4 cells, at least
-    50 m) of each cell; the few wanted cells with no element that close (e.g. above the
-    surface) are resolved with a k-d tree over all centres. Exact either way.
+    Exact (ties: lowest index), by a ring search over a bucket grid of side ``bucket_m``
+    (default: the mean element spacing, at least one cell).
     """
     xy = np.asarray(xy, dtype=np.float64)
-    search = max(4.0 * grid.cell_m, 50.0) if search_m is None else float(search_m)
-    d2 = np.full(grid.shape, np.inf)
     idx = np.full(grid.shape, -1, dtype=np.int64)
-    want = np.ascontiguousarray(want, dtype=np.bool_)
-    _kernels.nearest_element(np.ascontiguousarray(xy[:, 0]), np.ascontiguousarray(xy[:, 1]),
-                             float(grid.x0_m), float(grid.top_m), float(grid.cell_m), grid.nz,
-                             grid.nx, search, want, d2, idx)
-    missing = want & (idx < 0)
-    if missing.any():
-        from scipy.spatial import cKDTree
-
-        ii, jj = np.nonzero(missing)
-        centres = np.column_stack([grid.x_centres()[jj], grid.y_centres()[ii]])
-        _, nearest = cKDTree(xy).query(centres)
-        idx[ii, jj] = nearest
+    ii, jj = np.nonzero(np.asarray(want, dtype=bool))
+    if ii.size == 0:
+        return idx
+    b = _buckets(xy, grid, bucket_m)
+    out = np.empty(ii.size, dtype=np.int64)
+    _kernels.nearest_element_cells(*b, grid.x_centres()[jj], grid.y_centres()[ii], out)
+    idx[ii, jj] = out
     return idx
 
 
@@ -328,21 +340,21 @@ def fill_background(mean: np.ndarray, count: np.ndarray, xy: np.ndarray, values:
     """Fill the empty cells (``count == 0``) of rasterised ``mean`` (nz, nx, k) in place.
 
     ``mode="global"``: the mean of all elements; ``"layer"``: the mean of the elements of the
-    layer of the element whose centre is nearest to the cell centre.
+    layer of the element whose centre is nearest to the cell centre (exact nearest search).
     """
-    empty = count == 0
-    if not empty.any():
-        return mean
+    values = np.asarray(values, dtype=np.float64)
     if mode == "global":
-        mean[empty] = values.mean(axis=0)
+        _kernels.fill_empty_constant(mean, count, values.mean(axis=0))
         return mean
+    layer = np.asarray(layer, dtype=np.int64)
     n_layers = int(layer.max()) + 1
     counts = np.bincount(layer, minlength=n_layers).astype(np.float64)
     layer_mean = np.stack([np.bincount(layer, weights=values[:, c], minlength=n_layers)
                            for c in range(values.shape[1])], axis=1)
     layer_mean /= np.maximum(counts, 1.0)[:, None]
-    nearest = nearest_element_index(xy, grid, empty)
-    mean[empty] = layer_mean[layer[nearest[empty]]]
+    b = _buckets(np.asarray(xy, dtype=np.float64), grid, None)
+    _kernels.fill_empty_from_layer(mean, count, *b, float(grid.x0_m), float(grid.top_m),
+                                   float(grid.cell_m), layer, layer_mean)
     return mean
 
 

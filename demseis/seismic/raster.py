@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from demseis.errors import InputError
-from demseis.seismic._kernels import rasterise_sum
+from demseis.seismic._kernels import divide_by_count, rasterise_sum
 from demseis.seismic.grid import Grid
 
 
@@ -41,6 +41,8 @@ def rasterise(
             f"rasterise: expected xy (n, 2), radius (n,), values (n[, k]); got "
             f"{xy.shape}, {radius.shape}, {np.shape(values)}"
         )
+    if not (np.all(np.isfinite(xy)) and np.all(np.isfinite(radius)) and np.all(radius >= 0)):
+        raise InputError("rasterise: xy and radius must be finite and radius >= 0 m")
     k = vals.shape[1]
     total = np.zeros((grid.nz, grid.nx, k), dtype=np.float64)
     count = np.zeros((grid.nz, grid.nx), dtype=np.int32)
@@ -49,7 +51,5 @@ def rasterise(
         np.ascontiguousarray(vals), float(grid.x0_m), float(grid.top_m), float(grid.cell_m),
         grid.nz, grid.nx, total, count,
     )
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean = total / count[:, :, None]
-    mean[count == 0] = np.nan
-    return (mean[:, :, 0] if squeeze else mean), count
+    divide_by_count(total, count)
+    return (total[:, :, 0] if squeeze else total), count

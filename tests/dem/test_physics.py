@@ -10,7 +10,7 @@ import pytest
 from demseis.dem import Engine, Material, settle_pack
 from demseis.dem.engine import time_step
 
-FREE = Material(gravity_m_s2=0.0, damping_scale=0.0, friction=0.0)
+FREE = Material(gravity_m_s2=0.0, damping_scale=0.0, friction=0.0, cohesion_n=0.0)
 
 
 def _m(r, rho=2500.0):
@@ -38,8 +38,8 @@ def test_collision_lasts_half_period():
 def test_bonded_pair_oscillates_with_full_period():
     """A bonded pair vibrates harmonically: period 2 pi sqrt(m_eff / Kn), also in tension."""
     r1, r2 = 15.0, 20.0
-    mat = Material(gravity_m_s2=0.0, damping_scale=0.0, friction=0.0, model="bonded",
-                   bond_strain=0.05)
+    mat = Material(gravity_m_s2=0.0, damping_scale=0.0, friction=0.0, cohesion_n=0.0,
+                   model="bonded", bond_strain=0.05)
     m_eff = _m(r1) * _m(r2) / (_m(r1) + _m(r2))
     period = 2 * math.pi * math.sqrt(m_eff / mat.kn_n_m)
     dt = period / 1000
@@ -86,8 +86,8 @@ def test_undamped_energy_drift_over_1e4_steps(dt_factor, drift_max, swing_max):
     # triangular lattice (rigid with nearest-neighbour bonds), spacing 50 m
     g = np.c_[(ii + 0.5 * (jj % 2)).ravel() * 50.0, jj.ravel() * 50.0 * math.sqrt(3) / 2]
     pos = g + rng.uniform(-0.2, 0.2, g.shape)
-    mat = Material(gravity_m_s2=0.0, damping_scale=0.0, friction=0.0, model="bonded",
-                   bond_strain=0.9)
+    mat = Material(gravity_m_s2=0.0, damping_scale=0.0, friction=0.0, cohesion_n=0.0,
+                   model="bonded", bond_strain=0.9)
     dt5 = time_step(r.min(), mat.density_kg_m3, mat.kn_n_m)
     eng = Engine(pos, r, mat, skin_m=25.0, dt_s=dt_factor * dt5)
     eng.bond_initial_contacts(tol_frac=0.05)

@@ -164,3 +164,25 @@ def test_bad_method_raises(pack_small):
     xy, r = pack_small
     with pytest.raises(InputError, match="method"):
         element_strain(xy, xy, r, method="delaunay")
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=25, deadline=None)
+@given(angle=st.floats(-np.pi, np.pi), tx=st.floats(-1e4, 1e4), seed=st.integers(0, 2**31 - 1))
+def test_objectivity_and_permutation(pack_small, angle, tx, seed):
+    """gamma_max is unchanged by a rigid motion of the current state and follows a permutation."""
+    xy, r = pack_small
+    rng = np.random.default_rng(seed)
+    cur = xy + rng.normal(0.0, 5.0, size=xy.shape)
+    base = element_strain(xy, cur, r)
+    rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    moved = element_strain(xy, cur @ rot.T + [tx, -tx], r)
+    np.testing.assert_array_equal(moved.valid, base.valid)
+    np.testing.assert_allclose(moved.gamma_max[base.valid], base.gamma_max[base.valid],
+                               rtol=1e-7, atol=1e-9)
+    perm = rng.permutation(xy.shape[0])
+    permuted = element_strain(xy[perm], cur[perm], r[perm])
+    np.testing.assert_allclose(permuted.gamma_max, base.gamma_max[perm], rtol=1e-9, atol=1e-12)

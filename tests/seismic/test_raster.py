@@ -8,7 +8,8 @@ from hypothesis import strategies as st
 
 from demseis.seismic import Grid, rasterise
 from demseis.seismic import _kernels
-from demseis.seismic.properties import PropertyModel, gaussian_weights, nearest_element_index, smooth
+from demseis.seismic.properties import (PropertyModel, gaussian_weights, nearest_element_index,
+                                        smooth)
 
 
 def slow_rasterise(xy, radius, values, grid):
@@ -77,14 +78,15 @@ def test_nearest_element_matches_brute_force():
     grid = Grid(x0_m=0.0, top_m=300.0, cell_m=10.0, nz=30, nx=40)
     xy = np.column_stack([rng.uniform(0, 400, 120), rng.uniform(0, 200, 120)])  # none near top
     want = rng.random(grid.shape) < 0.4
-    idx = nearest_element_index(xy, grid, want, search_m=35.0)  # many need the k-d tree
+    xy[:10] = np.round(xy[:10] / 5.0) * 5.0  # some exact ties
     ii, jj = np.nonzero(want)
     cx = grid.x_centres()[jj]
     cy = grid.y_centres()[ii]
     d2 = (cx[:, None] - xy[None, :, 0]) ** 2 + (cy[:, None] - xy[None, :, 1]) ** 2
-    got = idx[ii, jj]
-    np.testing.assert_allclose(d2[np.arange(got.size), got], d2.min(axis=1))
-    assert np.all(idx[~want] == -1)
+    for bucket in (None, 17.0, 3.0, 900.0):
+        idx = nearest_element_index(xy, grid, want, bucket_m=bucket)
+        np.testing.assert_array_equal(idx[ii, jj], np.argmin(d2, axis=1))
+        assert np.all(idx[~want] == -1)
 
 
 @pytest.mark.parametrize("sigma", [0.5, 0.7, 1.3])
@@ -112,3 +114,18 @@ def test_smooth_is_gaussian_then_median():
     np.testing.assert_allclose(smooth(a, m), ref, atol=1e-10)
     off = PropertyModel(gaussian_sigma_cells=0.0, median_size_cells=1)
     np.testing.assert_array_equal(smooth(a, off), a)
+
+
+def test_grid_and_rasterise_reject_bad_input():
+    from demseis.errors import InputError
+
+    with pytest.raises(InputError, match="cell_m"):
+        Grid.covering(100.0, 100.0, cell_m=0.0)
+    with pytest.raises(InputError, match="nz"):
+        Grid(x0_m=0.0, top_m=10.0, cell_m=1.0, nz=0, nx=3)
+    grid = Grid.covering(100.0, 100.0)
+    assert grid.shape == (10, 10)
+    with pytest.raises(InputError, match="radius"):
+        rasterise(np.zeros((1, 2)), np.array([-1.0]), np.ones(1), grid)
+    with pytest.raises(InputError, match="expected xy"):
+        rasterise(np.zeros((2, 3)), np.ones(2), np.ones(2), grid)

@@ -1,0 +1,69 @@
+"""Deterministic shard contents for the datasets tests (also used by killed child processes)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from demseis.dem.types import Snapshot
+from demseis.datasets import create_store, write_shard
+
+PARAMS = {"run_id": "int32", "snapshot": "int16", "freq_hz": "float32", "snr_db": "float32",
+          "noise_kind": "int8"}
+ARRAYS = ("seismic", "fault", "damage", "strain", "layer")
+
+
+def grid_attrs(shape: tuple[int, int]) -> dict:
+    return {"x0_m": 0.0, "top_m": 0.0, "cell_m": 10.0, "nz": shape[0], "nx": shape[1]}
+
+
+def shard_data(k: int, s: int, shape: tuple[int, int], arrays=ARRAYS, params=PARAMS,
+               n_snapshots: int = 3, seed: int = 0):
+    """(arrays, params, particles) of shard ``k``: random but a pure function of its inputs."""
+    rng = np.random.default_rng([seed, k])
+    h, w = shape
+    data = {}
+    for name in arrays:
+        if name in ("seismic", "strain", "impedance"):
+            data[name] = rng.normal(size=(s, h, w)).astype(np.float32)
+        elif name == "fault":
+            data[name] = rng.integers(0, 2, (s, h, w), dtype=np.uint8)
+        elif name == "damage":
+            data[name] = rng.integers(0, 3, (s, h, w), dtype=np.uint8)
+        elif name == "layer":
+            data[name] = rng.integers(0, 60, (s, h, w), dtype=np.int16)
+    snap = np.arange(s) % n_snapshots
+    pvals = {
+        "run_id": np.full(s, k),
+        "snapshot": snap,
+        "freq_hz": np.array([20.0, 40.0, 60.0])[np.arange(s) % 3],
+        "snr_db": np.where(np.arange(s) % 2 == 0, np.inf, 10.0),
+        "noise_kind": np.arange(s) % 2,
+    }
+    pvals = {n: pvals[n] for n in params}
+    particles = []
+    n0 = int(rng.integers(3, 12))
+    for i in range(n_snapshots):
+        n = n0 + i  # deposited elements appear later
+        particles.append(Snapshot(
+            index=i, step=100 * i, throw_m=10.0 * i,
+            ids=np.arange(n, dtype=np.int64),
+            xy=rng.uniform(0, 1000, (n, 2)),
+            radius=rng.uniform(12.5, 25, n),
+            layer=rng.integers(0, 48, n).astype(np.int16),
+            deposited=np.arange(n) >= n0,
+        ))
+    return data, pvals, particles
+
+
+def make_store(path: Path, n_shards: int = 4, s: int = 6, shape=(24, 32), write=None,
+               arrays=ARRAYS, params=PARAMS, seed: int = 0, overwrite: bool = False):
+    """Create a store and write the shards in ``write`` (default all)."""
+    create_store(path, n_shards=n_shards, samples_per_shard=s, shape=shape, arrays=list(arrays),
+                 params=params, attrs={"config": {"seed": seed}, "grid": grid_attrs(shape)},
+                 overwrite=overwrite)
+    for k in range(n_shards) if write is None else write:
+        d, p, parts = shard_data(k, s, shape, arrays, params, seed=seed)
+        write_shard(path, k, d, p, parts)
+    return path
