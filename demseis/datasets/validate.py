@@ -135,6 +135,12 @@ def validate_store(path: str | Path, *, check_particles: bool = True) -> Validat
         missing = [k for k in _GRID_KEYS if k not in grid]
         if missing:
             problems.append(f"root attr 'grid' lacks {missing}")
+        elif grid.get("domain", "depth") == "time":
+            if (grid.get("nt"), grid["nx"]) != layout.shape:
+                problems.append(
+                    f"time-domain grid nt, nx = ({grid.get('nt')}, {grid['nx']}) but samples are "
+                    f"{layout.shape}"
+                )
         elif (grid["nz"], grid["nx"]) != layout.shape:
             problems.append(
                 f"grid nz, nx = ({grid['nz']}, {grid['nx']}) but samples are {layout.shape}"

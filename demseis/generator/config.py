@@ -180,12 +180,22 @@ class OutputSection:
     Attributes
     ----------
     impedance : also store the smoothed impedance grid (float32).
+    domain : ``"depth"`` (sections convolved in two-way time and mapped back to depth, so the
+        arrays are (H, W) cells of the grid) or ``"time"`` (sections and every label array on a
+        two-way-time axis of ``dt_s`` samples, long enough for the slowest possible column).
+    dt_s : time-domain sample interval (s).
     """
 
     impedance: bool = False
+    domain: str = "depth"
+    dt_s: float = 0.002
 
 
-_OUTPUT_DEFS = {"impedance": ParamDef("impedance", bool, "fixed", False)}
+_OUTPUT_DEFS = {
+    "impedance": ParamDef("impedance", bool, "fixed", False),
+    "domain": ParamDef("domain", str, "fixed", "depth", choices=("depth", "time")),
+    "dt_s": ParamDef("dt_s", float, "fixed", 0.002, 1.0e-4, 0.02),
+}
 
 
 @dataclass(frozen=True)

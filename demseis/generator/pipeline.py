@@ -40,6 +40,30 @@ def grid_of(cfg: Config) -> Grid:
     return Grid.covering(cfg.model.width_m, cfg.model.height_m, cfg.grid.cell_m)
 
 
+def time_axis_of(cfg: Config) -> np.ndarray | None:
+    """The two-way-time axis (s) of a time-domain sweep, None in the depth domain.
+
+    Its length must be the same for every run, so it is built for the slowest Vp any run can
+    produce: the smallest lithology Vp, lowered by the largest ``vp_scatter`` the sweep allows.
+    """
+    if cfg.output.domain != "time":
+        return None
+    from demseis.generator.params import spec_values_hint
+    from demseis.seismic import time_axis
+
+    scatter_hi = spec_values_hint(cfg.sweep.params["vp_scatter"])[1]
+    vp_min = float(min(cfg.properties["vp_min_m_s"])) * (1.0 - 3.0 * float(scatter_hi))
+    grid = grid_of(cfg)
+    return time_axis(grid.nz, grid.cell_m, vp_min, cfg.output.dt_s)
+
+
+def sample_shape(cfg: Config) -> tuple[int, int]:
+    """(H, W) of every stored sample: grid cells (depth) or (time samples, columns)."""
+    grid = grid_of(cfg)
+    t_s = time_axis_of(cfg)
+    return grid.shape if t_s is None else (int(t_s.size), grid.nx)
+
+
 def array_dtypes(cfg: Config) -> dict[str, str]:
     """Name → dtype of the per-sample arrays this config stores."""
     out = dict(SAMPLE_ARRAYS)
@@ -161,6 +185,7 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
     from demseis.labels import label_maps, strain_history
     from demseis.seismic import (
         add_noise,
+        depth_to_time,
         draw_layer_properties,
         element_properties,
         property_grids,
@@ -177,7 +202,8 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
 
     dtypes = array_dtypes(cfg)
     S = len(spec.renders)
-    arrays = {k: np.zeros((S, grid.nz, grid.nx), dtype=v) for k, v in dtypes.items()}
+    t_s = time_axis_of(cfg)
+    arrays = {k: np.zeros((S, *sample_shape(cfg)), dtype=v) for k, v in dtypes.items()}
     pdt = param_dtypes()
     params = {k: np.zeros(S, dtype=v) for k, v in pdt.items()}
 
@@ -188,9 +214,17 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
         snap = snapshots[k]
         vp_e, rho_e = element_properties(snap.ids, snap.layer, layer_props, model, elem_seed)
         vp_g, rho_g = property_grids(snap.xy, snap.radius, vp_e, rho_e, snap.layer, grid, model)
-        maps = label_maps(snap, history[k], grid, cfg.labels)
+        maps = dict(label_maps(snap, history[k], grid, cfg.labels))
         freqs = sorted({r.freq_hz for r in renders})
-        sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs)
+        impedance = vp_g * rho_g
+        if t_s is None:
+            sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs)
+        else:
+            sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs, domain="time", t_s=t_s)
+            fills = {"fault": 0, "damage": 0, "strain": 0.0, "layer": -1}
+            for name, fill in fills.items():
+                maps[name] = depth_to_time(maps[name], vp_g, grid.cell_m, t_s, method="nearest", fill=fill)
+            impedance = depth_to_time(impedance, vp_g, grid.cell_m, t_s, method="nearest", fill=0.0)
         for r in renders:
             clean = sections[freqs.index(r.freq_hz)]
             noisy = add_noise(clean, r.snr_db, r.noise_kind, np.random.default_rng(r.seed))
@@ -201,7 +235,7 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
             arrays["strain"][i] = maps["strain"]
             arrays["layer"][i] = maps["layer"]
             if "impedance" in arrays:
-                arrays["impedance"][i] = vp_g * rho_g
+                arrays["impedance"][i] = impedance
             row = {
                 "run_id": spec.run, "sample_in_run": i, "snapshot": k, "step": snap.step,
                 "throw_m": snap.throw_m, "n_elements": snap.n, "freq_hz": r.freq_hz,

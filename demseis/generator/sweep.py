@@ -21,7 +21,14 @@ import numpy as np
 
 from demseis.errors import ConfigError, InputError, SimulationError
 from demseis.generator.config import Config, parse_config
-from demseis.generator.pipeline import array_dtypes, grid_of, param_dtypes, run_shard, PARAM_CODES
+from demseis.generator.pipeline import (
+    PARAM_CODES,
+    array_dtypes,
+    grid_of,
+    param_dtypes,
+    run_shard,
+    sample_shape,
+)
 
 #: element-steps per second of one core, used only for ``--dry-run`` time estimates
 DRY_RUN_ELEMENT_STEPS_PER_S = 5.0e6
@@ -64,10 +71,14 @@ class SweepSummary:
 def store_attrs(cfg: Config) -> dict[str, Any]:
     """Root attributes the driver writes when it creates a store."""
     grid = grid_of(cfg)
+    grid_attrs: dict[str, Any] = {"x0_m": grid.x0_m, "top_m": grid.top_m, "cell_m": grid.cell_m,
+                                  "nz": grid.nz, "nx": grid.nx, "domain": cfg.output.domain}
+    if cfg.output.domain == "time":
+        grid_attrs["dt_s"] = cfg.output.dt_s
+        grid_attrs["nt"] = sample_shape(cfg)[0]
     return {
         "config": cfg.to_dict(),
-        "grid": {"x0_m": grid.x0_m, "top_m": grid.top_m, "cell_m": grid.cell_m,
-                 "nz": grid.nz, "nx": grid.nx},
+        "grid": grid_attrs,
         "param_codes": {k: list(v) for k, v in PARAM_CODES.items()},
     }
 
@@ -108,7 +119,7 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
         out,
         n_shards=cfg.sweep.n_runs,
         samples_per_shard=cfg.samples_per_run,
-        shape=grid_of(cfg).shape,
+        shape=sample_shape(cfg),
         arrays=array_dtypes(cfg),
         params=param_dtypes(),
         attrs=attrs,
@@ -159,7 +170,8 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
     grid = grid_of(cfg)
     S = cfg.samples_per_run
     n_runs = cfg.sweep.n_runs if pending is None else pending
-    bytes_per_sample = sum(np.dtype(d).itemsize for d in array_dtypes(cfg).values()) * grid.nz * grid.nx
+    h, w = sample_shape(cfg)
+    bytes_per_sample = sum(np.dtype(d).itemsize for d in array_dtypes(cfg).values()) * h * w
     m = cfg.model
     mean_r2 = (m.radius_min_m**2 + m.radius_min_m * m.radius_max_m + m.radius_max_m**2) / 3
     n_elem = 0.82 * m.width_m * m.height_m / (math.pi * mean_r2)
@@ -178,7 +190,7 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
         f"DEM runs: {n_runs} to compute (of {cfg.sweep.n_runs}); ~{n_elem:,.0f} elements each",
         f"samples: {n_runs * S} ({cfg.model.n_snapshots} snapshots x "
         f"{cfg.renders_per_run_snapshot} renders per run)",
-        f"sample shape: {grid.nz} x {grid.nx} cells of {grid.cell_m:g} m; arrays: "
+        f"sample shape: {h} x {w} ({cfg.output.domain} domain; {grid.cell_m:g} m cells); arrays: "
         + ", ".join(f"{k} {v}" for k, v in array_dtypes(cfg).items()),
         f"size on disk: at most {n_runs * S * bytes_per_sample / 2**20:,.1f} MiB (uncompressed) "
         "plus particle snapshots",

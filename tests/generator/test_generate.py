@@ -264,3 +264,27 @@ def test_unreachable_scheduler_writes_nothing(tmp_path, capsys):
     assert code == 2
     assert "--scheduler 'not-an-address'" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_time_domain_output(tmp_path):
+    """domain = "time": sections and labels share one TWT axis; labels are the depth labels mapped."""
+    from demseis.generator.config import load_config
+    from demseis.generator.pipeline import sample_shape
+
+    cfg_file = tmp_path / "c.toml"
+    cfg_file.write_text("[sweep]\nn_runs = 1\n[output]\ndomain = \"time\"\ndt_s = 0.002\n")
+    out = tmp_path / "time.zarr"
+    assert main(["generate", str(cfg_file), "--preset", "tiny", "--out", str(out), "--workers", "0", "--quiet"]) == 0
+    root = zarr.open_group(str(out), mode="r")
+    cfg = load_config(cfg_file, preset="tiny")
+    nt, nx = sample_shape(cfg)
+    grid = root.attrs["grid"]
+    assert grid["domain"] == "time" and grid["dt_s"] == 0.002 and grid["nt"] == nt
+    # the slowest column (vp >= lower bound) fits: 2 * depth / vp_min <= (nt - 1) * dt
+    assert root["seismic"].shape == root["fault"].shape == (6, nt, nx)
+    assert nt != grid["nz"]
+    fault = root["fault"][:]
+    snap = root["params/snapshot"][:]
+    assert fault[snap > 0].sum() > 0 and fault[snap == 0].sum() == 0
+    assert main(["validate", str(out)]) == 0
+    assert main(["export-segy", str(out), "--sample", "5", "--out", str(tmp_path / "t.sgy")]) == 0
