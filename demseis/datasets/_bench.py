@@ -12,6 +12,7 @@ random ``crop x crop`` windows through ``torch.utils.data.DataLoader``:
 
 Both use the same batch size, workers and collation; workers are persistent and one untimed
 epoch warms them (and the page cache) before ``repeats`` timed epochs, whose median is reported.
+Epochs of the two loaders alternate, so that the load of a shared machine hits both alike.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from demseis.datasets.dataset import FaultSegDataset, ShardAwareSampler
+from demseis.datasets.dataset import FaultSegDataset, ShardAwareSampler, crop_offsets
 from demseis.datasets.store import create_store, finalize_store, write_shard
 
 
@@ -76,26 +77,35 @@ class MemmapCrops:
 
         if self._arrays is None:
             self._arrays = [np.load(f, mmap_mode="r") for f in self.files]
-        rng = np.random.default_rng([self.seed, 0, int(i)])
-        r0 = int(rng.integers(0, self.h - self.crop + 1))
-        c0 = int(rng.integers(0, self.w - self.crop + 1))
+        r, c = crop_offsets(self.seed, 0, np.array([i]), self.h - self.crop + 1,
+                            self.w - self.crop + 1)  # the same windows as FaultSegDataset
+        r0, c0 = int(r[0]), int(c[0])
         win = (int(i), slice(r0, r0 + self.crop), slice(c0, c0 + self.crop))
         x = np.array(self._arrays[0][win], dtype=np.float32)[None]
         y = np.array(self._arrays[1][win])  # uint8, like FaultSegDataset's default
         return torch.from_numpy(x), torch.from_numpy(y)
 
 
-def _epoch_rates(loader, n_items: int, repeats: int) -> list[float]:
-    for _ in loader:  # warm-up: worker start, page cache, first-touch allocations
-        pass
-    rates = []
+def _epoch_rate(loader, n_items: int) -> float:
+    t0 = time.perf_counter()
+    seen = 0
+    for x, _y in loader:
+        seen += x.shape[0]
+    rate = seen / (time.perf_counter() - t0)
+    assert seen == n_items
+    return rate
+
+
+def _interleaved_rates(loaders: dict, n_items: int, repeats: int) -> dict[str, list[float]]:
+    """Epoch rates of each loader, alternating loaders epoch by epoch so that changes in the
+    machine's load hit all of them alike; one untimed warm-up epoch each first."""
+    for loader in loaders.values():  # warm-up: worker start, page cache, first-touch pages
+        for _ in loader:
+            pass
+    rates: dict[str, list[float]] = {name: [] for name in loaders}
     for _ in range(repeats):
-        t0 = time.perf_counter()
-        seen = 0
-        for x, _y in loader:
-            seen += x.shape[0]
-        rates.append(seen / (time.perf_counter() - t0))
-        assert seen == n_items
+        for name, loader in loaders.items():
+            rates[name].append(_epoch_rate(loader, n_items))
     return rates
 
 
@@ -161,8 +171,8 @@ def run_loader_benchmark(
             zl = DataLoader(ds, sampler=ShardAwareSampler(ds, seed=seed), **kw)
             ml = DataLoader(mm, sampler=RandomSampler(mm, generator=torch.Generator().manual_seed(seed)),
                             **kw)
-            z_rates = _epoch_rates(zl, n, repeats)
-            m_rates = _epoch_rates(ml, n, repeats)
+            rates = _interleaved_rates({"zarr": zl, "memmap": ml}, n, repeats)
+            z_rates, m_rates = rates["zarr"], rates["memmap"]
             del zl, ml
             z_med, m_med = statistics.median(z_rates), statistics.median(m_rates)
             result[f"zarr_samples_per_s_w{nw}"] = round(z_med, 1)

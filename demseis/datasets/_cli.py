@@ -40,7 +40,8 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 def _validate(args: argparse.Namespace) -> int:
     from demseis.datasets.validate import validate_store
 
-    report = validate_store(args.path, check_particles=not args.no_particles)
+    report = validate_store(args.path, check_particles=not args.no_particles,
+                            progress=sys.stderr.isatty())
     for line in report.problems:
         print(line)
     print(report.summary())

@@ -263,11 +263,6 @@ class FaultSegDataset:
         """Parameters of item ``i`` as a dict of Python scalars."""
         return {n: v[i].item() for n, v in self._params.items()}
 
-    def _array(self, name: str):
-        if self._arrays is None:
-            self._open_arrays()
-        return self._arrays[name]
-
     def _open_arrays(self) -> None:
         """Open the store in this process: zarr arrays plus raw readers where possible."""
         group = open_store(self.path, "r")

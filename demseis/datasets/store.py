@@ -62,7 +62,7 @@ DEFAULT_ARRAYS: tuple[str, ...] = ("seismic", "fault", "damage", "strain", "laye
 LABEL_RANGES: dict[str, tuple[int, int | None]] = {
     "fault": (0, 1),
     "damage": (0, 2),
-    "layer": (-1, None),  # -1: no rock covers the cell (labels.label_maps)
+    "layer": (-1, None),  # -1: no rock (above the free surface), see demseis.labels
 }
 """Inclusive valid value range of each integer label array (None: no upper bound)."""
 

@@ -7,6 +7,7 @@ and consistent parameters, and its DEM run's particle snapshots (when stored) mu
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -97,7 +98,8 @@ def _fmt(values: np.ndarray, limit: int = 8) -> str:
     return ", ".join(vals) + (f" ... (+{more})" if more > 0 else "")
 
 
-def validate_store(path: str | Path, *, check_particles: bool = True) -> ValidationReport:
+def validate_store(path: str | Path, *, check_particles: bool = True,
+                   progress: bool = False) -> ValidationReport:
     """Check a demseis store; return every problem found.
 
     Checks
@@ -110,6 +112,12 @@ def validate_store(path: str | Path, *, check_particles: bool = True) -> Validat
       the shard and different from every other shard's; ``snapshot`` (if stored) non-negative
       and, with particles stored, less than the run's number of snapshots;
     - the particles of each done shard's run, where stored: readable, consistent offsets.
+
+    Parameters
+    ----------
+    path : store directory.
+    check_particles : also read each done run's particle snapshots.
+    progress : show a tqdm bar over the done shards on stderr.
 
     Raises
     ------
@@ -163,7 +171,10 @@ def validate_store(path: str | Path, *, check_particles: bool = True) -> Validat
     s = layout.samples_per_shard
     pgroup = group["params"] if layout.params else None
     run_of_shard: dict[int, int] = {}
-    for k in done_shards.tolist():
+    from tqdm import tqdm
+
+    for k in tqdm(done_shards.tolist(), desc="validate", unit="shard", disable=not progress,
+                  file=sys.stderr):
         sel = layout.shard_slice(k)
         for name in layout.arrays:
             try:

@@ -238,3 +238,17 @@ def test_read_particles_missing_run(tmp_path):
     path = make_store(tmp_path / "s.zarr", write=[0])
     with pytest.raises(StoreError, match="no particle snapshots for run 1"):
         read_particles(path, 1)
+
+
+def test_layer_minus_one_means_no_rock_and_is_valid(tmp_path):
+    from demseis.datasets import validate_store
+
+    path = make_store(tmp_path / "s.zarr", n_shards=1, write=[])
+    d, p, parts = shard_data(0, 6, (24, 32))
+    d["layer"][:, :3] = -1  # rows above the free surface
+    write_shard(path, 0, d, p, parts)
+    assert validate_store(path).ok
+    np.testing.assert_array_equal(open_store(path)["layer"][:, :3], -1)
+    d["layer"][0, 5, 5] = -2
+    with pytest.raises(InputError, match="layer.*allowed \\[-1, 32767\\]"):
+        write_shard(path, 0, d, p, parts)
