@@ -131,7 +131,7 @@ def store_info_lines(path: str | Path) -> list[str]:
         lines.append(f"config: name={cfg.get('name')} seed={sw.get('seed')} n_runs={sw.get('n_runs')} "
                      f"model={cfg.get('model', {}).get('width_m')}x{cfg.get('model', {}).get('height_m')} m "
                      f"snapshots={cfg.get('model', {}).get('n_snapshots')}")
-    failed = attrs.get("failed_runs") or {}
+    failed = attrs.get("failures") or {}
     if failed:
         lines.append(f"failed runs: {len(failed)}")
         for k, v in sorted(failed.items(), key=lambda kv: int(kv[0])):

@@ -288,3 +288,31 @@ def test_time_domain_output(tmp_path):
     assert fault[snap > 0].sum() > 0 and fault[snap == 0].sum() == 0
     assert main(["validate", str(out)]) == 0
     assert main(["export-segy", str(out), "--sample", "5", "--out", str(tmp_path / "t.sgy")]) == 0
+
+
+def test_unstable_run_recorded_and_sweep_goes_on(tmp_path, monkeypatch, capsys):
+    """A SimulationError in one run is recorded with its message; the other runs are written;
+    a rerun retries only the failed run."""
+    from demseis.errors import SimulationError
+    from demseis.generator import sweep
+
+    real = sweep.run_shard
+
+    def flaky(cfg, run, progress=None):
+        if run == 1:
+            raise SimulationError("kinetic energy blew up at step 123")
+        return real(cfg, run, progress)
+
+    monkeypatch.setattr(sweep, "run_shard", flaky)
+    out = tmp_path / "f.zarr"
+    code = main(["generate", "--preset", "tiny", "--out", str(out), "--workers", "0", "--quiet"])
+    text = capsys.readouterr().out
+    assert code == 1
+    assert "1 written now, 1 failed" in text
+    assert "run 1 failed: SimulationError: kinetic energy blew up at step 123" in text
+    assert main(["info", str(out)]) == 0
+    assert "run 1: SimulationError" in capsys.readouterr().out
+    monkeypatch.setattr(sweep, "run_shard", real)
+    assert main(["generate", "--preset", "tiny", "--out", str(out), "--workers", "0", "--quiet"]) == 0
+    assert "1 already done, 1 written now, 0 failed" in capsys.readouterr().out
+    assert main(["validate", str(out)]) == 0
