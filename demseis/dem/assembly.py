@@ -92,7 +92,8 @@ def draw_radii(n: int, radius_min_m: float, radius_max_m: float,
 def _check_geometry(width_m, height_m, radius_min_m, radius_max_m):
     for name, v in (("width_m", width_m), ("height_m", height_m),
                     ("radius_min_m", radius_min_m), ("radius_max_m", radius_max_m)):
-        if not (isinstance(v, (int, float, np.floating, np.integer)) and math.isfinite(v) and v > 0):
+        ok = isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, bool)
+        if not (ok and math.isfinite(v) and v > 0):
             raise InputError(f"{name}={v!r} must be a finite number > 0")
     if radius_max_m < radius_min_m:
         raise InputError(f"radius_max_m={radius_max_m} < radius_min_m={radius_min_m}")

@@ -21,7 +21,7 @@ from collections.abc import Callable
 import numpy as np
 
 from demseis.dem.assembly import Assembly
-from demseis.dem.engine import Engine, validate_material
+from demseis.dem.engine import Engine, time_step, validate_material
 from demseis.dem.types import Material, NormalFault, Snapshot
 from demseis.errors import InputError
 
@@ -163,14 +163,10 @@ def simulate(asm: Assembly, fault: NormalFault, material: Material = Material(),
     cd, sd = math.cos(dip), math.sin(dip)
     rmin, rmax = asm.radius_min_m, asm.radius_max_m
 
-    eng = Engine(xy0, asm.radius, material,
-                 dt_s=None)
     # dt from Eq. 5 with the smallest radius that can ever occur (sediment included)
-    from demseis.dem.engine import time_step
-    eng.dt = time_step(min(rmin, float(asm.radius.min())), material.density_kg_m3,
-                       material.kn_n_m)
-    eng.eta[:] = eng.dt * material.damping_scale
-    eng._eta_default = eng.dt * material.damping_scale
+    dt = time_step(min(rmin, float(asm.radius.min())), material.density_kg_m3,
+                   material.kn_n_m)
+    eng = Engine(xy0, asm.radius, material, dt_s=dt)
 
     dip_total = fault.throw_m / sd
     L = dip_total + 4 * rmax

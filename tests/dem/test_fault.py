@@ -106,3 +106,24 @@ def test_bad_input_and_instability(pack):
     eng = Engine(asm.xy, asm.radius, Material(kn_n_m=1e12), dt_s=0.01)
     with pytest.raises(SimulationError, match="unstable"):
         eng.run(2000)
+
+
+@pytest.mark.parametrize("cause", ["nan", "ke", "box"])
+def test_instability_names_its_cause(pack, cause):
+    from demseis.dem import Engine
+    eng = Engine(pack.xy, pack.radius, Material())
+    eng.box = np.array([-100.0, W + 100.0, -100.0, 3 * H])
+    eng.vmax_limit = 100.0
+    k = int(np.argmax(pack.xy[:, 1]))  # the top element: free above
+    if cause == "nan":
+        eng.vel[k] = np.nan
+        match = "NaN"
+    elif cause == "ke":
+        eng.vel[k] = (0.0, 150.0)
+        match = "kinetic-energy blow-up"
+    else:
+        eng.vel[k] = (0.0, 90.0)  # below the speed limit, but it flies out of the top
+        eng.box[3] = pack.xy[k, 1] + 50.0
+        match = "left the box"
+    with pytest.raises(SimulationError, match=match):
+        eng.run(500)
