@@ -56,7 +56,7 @@ _BASE_PARAMS: tuple[ParamDef, ...] = (
     ParamDef("dip_deg", float, "run", 45.0, 10.0, 89.0, doc="basement fault dip (degrees)"),
     ParamDef("throw_m", float, "run", 450.0, 1.0, 1.0e5, doc="final vertical throw of the basement fault (m)"),
     ParamDef("fault_x_frac", float, "run", 0.5, 0.05, 0.95,
-             doc="x of the fault at mid-height, as a fraction of the model width"),
+             doc="x where the basement fault meets the model base, as a fraction of the width"),
     ParamDef("dip_direction", str, "run", "right", choices=("right", "left"),
              doc="side of the hanging wall"),
     # layering

@@ -7,7 +7,6 @@ frequencies and noise levels without re-running the DEM.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -122,12 +121,15 @@ def layer_thicknesses(cfg: Config, n_layers: int, cv: float, rng: np.random.Gene
     return h
 
 
-def fault_base_x(cfg: Config, frac: float, dip_deg: float, direction: str) -> float:
-    """x where the fault meets the base, given its x at mid-height (clipped into the box)."""
-    width, height = cfg.model.width_m, cfg.model.height_m
-    shift = 0.5 * height / math.tan(math.radians(dip_deg))
-    x = frac * width + (shift if direction == "right" else -shift)
-    return float(min(max(x, 0.05 * width), 0.95 * width))
+def run_info(cfg: Config, params: dict[str, Any]) -> dict[str, Any]:
+    """Derived per-run values stored with every sample: the fault's x at the base, the target throw.
+
+    ``fault_x_frac`` places the basement fault where it meets the base of the model. The fault
+    that grows through the cover is usually steeper than the basement fault (it is not
+    imposed), so its trace at the surface lies on the footwall side of that point.
+    """
+    return {"fault_x_m": float(params["fault_x_frac"]) * cfg.model.width_m,
+            "throw_target_m": float(params["throw_m"])}
 
 
 def material_of(params: dict[str, Any]) -> Material:
@@ -153,8 +155,9 @@ def simulate_run(
     material = material_of(p)
     thick = layer_thicknesses(cfg, int(p["n_layers"]), float(p["layer_thickness_cv"]),
                               rng_at(cfg, spec.run, 4))
+    info = run_info(cfg, p)
     fault = NormalFault(
-        x_m=fault_base_x(cfg, p["fault_x_frac"], p["dip_deg"], p["dip_direction"]),
+        x_m=info["fault_x_m"],
         dip_deg=float(p["dip_deg"]),
         throw_m=float(p["throw_m"]),
         dip_direction=str(p["dip_direction"]),
@@ -168,7 +171,7 @@ def simulate_run(
     )
     snaps = simulate(asm, fault, material, n_snapshots=cfg.model.n_snapshots,
                      sedimentation=cfg.model.sedimentation, rng=rng, progress=progress)
-    return snaps, {"fault_x_m": fault.x_m, "throw_target_m": fault.throw_m}
+    return snaps, info
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ import numpy as np
 from demseis.dem.types import Snapshot
 from demseis.errors import ConfigError, InputError
 from demseis.generator.config import PRESETS, Config, load_config, parse_config
-from demseis.generator.pipeline import fault_base_x, grid_of, property_model_of, simulate_run
+from demseis.generator.pipeline import grid_of, property_model_of, run_info, simulate_run
 from demseis.generator.sampling import plan_run, rng_at, seed_sequence
 
 
@@ -27,8 +27,7 @@ def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot], dict[st
             raise InputError(f"--run {run} is not done in store {source!r}")
         snaps = read_particles(path, run)
         p = plan_run(cfg, run).params
-        info = {"fault_x_m": fault_base_x(cfg, p["fault_x_frac"], p["dip_deg"], p["dip_direction"]),
-                "throw_target_m": float(p["throw_m"])}
+        info = run_info(cfg, p)
         return cfg, snaps, info
     if source in PRESETS:
         cfg = load_config(preset=source)

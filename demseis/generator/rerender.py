@@ -10,7 +10,7 @@ import numpy as np
 
 from demseis.errors import StoreError
 from demseis.generator.config import Config, parse_config
-from demseis.generator.pipeline import fault_base_x, render_run
+from demseis.generator.pipeline import render_run, run_info
 from demseis.generator.sampling import plan_run
 from demseis.generator.sweep import SweepSummary, _progress_bar, prepare_store
 
@@ -65,8 +65,7 @@ def rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snrs
             spec = plan_run(cfg, run)
             snaps = read_particles(src, run)
             p = spec.params
-            info = {"fault_x_m": fault_base_x(cfg, p["fault_x_frac"], p["dip_deg"], p["dip_direction"]),
-                    "throw_target_m": float(p["throw_m"])}
+            info = run_info(cfg, p)
             data = render_run(cfg, spec, snaps, info)
             write_shard(out, run, data.arrays, data.params, data.snapshots)
             summary.completed.append(run)
