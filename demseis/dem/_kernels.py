@@ -273,6 +273,87 @@ def wall_forces(pos, vel, radius, walls, wall_vel, wall_shear, kn, ks, mu, dt, f
 
 
 @njit(cache=True)
+def build_wall_candidates(pos, radius, walls, skin, cand, n_cand):
+    """List, per wall, the elements whose disk is within ``skin`` of the segment.
+
+    pos : (n, 2) float64; radius : (n,) float64; walls : (nw, 4) float64; skin : float (m).
+    cand : (nw, n) int32 output element indices; n_cand : (nw,) int32 output counts.
+    """
+    n = pos.shape[0]
+    for w in range(walls.shape[0]):
+        ax = walls[w, 0]
+        ay = walls[w, 1]
+        ex = walls[w, 2] - ax
+        ey = walls[w, 3] - ay
+        l2 = ex * ex + ey * ey
+        m = 0
+        for i in range(n):
+            px = pos[i, 0] - ax
+            py = pos[i, 1] - ay
+            s = (px * ex + py * ey) / l2
+            if s < 0.0:
+                s = 0.0
+            elif s > 1.0:
+                s = 1.0
+            dx = px - s * ex
+            dy = py - s * ey
+            cut = radius[i] + skin
+            if dx * dx + dy * dy < cut * cut:
+                cand[w, m] = i
+                m += 1
+        n_cand[w] = m
+
+
+@njit(cache=True)
+def wall_forces_listed(pos, vel, radius, walls, wall_vel, wall_shear, kn, ks, mu, dt, force,
+                       cand, n_cand):
+    """:func:`wall_forces` restricted to the candidates of :func:`build_wall_candidates`.
+
+    Elements off a wall's list are farther than the skin from it, so they feel no force and
+    their X_s with it is already 0 (reset when they left contact).
+    """
+    for w in range(walls.shape[0]):
+        ax = walls[w, 0]
+        ay = walls[w, 1]
+        ex = walls[w, 2] - ax
+        ey = walls[w, 3] - ay
+        l2 = ex * ex + ey * ey
+        for q in range(n_cand[w]):
+            i = cand[w, q]
+            px = pos[i, 0] - ax
+            py = pos[i, 1] - ay
+            s = (px * ex + py * ey) / l2
+            if s < 0.0:
+                s = 0.0
+            elif s > 1.0:
+                s = 1.0
+            dx = px - s * ex
+            dy = py - s * ey
+            d2 = dx * dx + dy * dy
+            ri = radius[i]
+            if d2 >= ri * ri or d2 == 0.0:
+                wall_shear[i, w] = 0.0
+                continue
+            d = np.sqrt(d2)
+            nx = dx / d
+            ny = dy / d
+            fn = kn * (ri - d)
+            vt = (vel[i, 0] - wall_vel[w, 0]) * (-ny) + (vel[i, 1] - wall_vel[w, 1]) * nx
+            xs = wall_shear[i, w] + vt * dt
+            fs = -ks * xs
+            cap = mu * fn
+            if fs > cap:
+                fs = cap
+                xs = -cap / ks
+            elif fs < -cap:
+                fs = -cap
+                xs = cap / ks
+            wall_shear[i, w] = xs
+            force[i, 0] += fn * nx - fs * ny
+            force[i, 1] += fn * ny + fs * nx
+
+
+@njit(cache=True)
 def body_forces(vel, mass, eta, gravity, force):
     """Set ``force`` to gravity plus global viscous damping: F = -eta v - m g y-hat.
 
@@ -289,7 +370,8 @@ def run_steps(n_steps, dt, pos, vel, force, radius, mass, inv_mass, eta, gravity
               kn, ks, mu, c0, r0, wall_kn, wall_mu,
               nbr, n_nbr, shear, bond, pos_ref, skin,
               new_nbr, new_n, new_shear, new_bond, cell_head, cell_next,
-              walls, wall_vel, wall_shear, box, vmax_limit, check_every):
+              walls, wall_vel, wall_shear, box, vmax_limit, check_every,
+              cand, n_cand, wall_disp):
     """Advance the assembly ``n_steps`` velocity-Verlet steps.
 
     Parameters
@@ -304,6 +386,10 @@ def run_steps(n_steps, dt, pos, vel, force, radius, mass, inv_mass, eta, gravity
     pos_ref : (n, 2) float64 positions at the last rebuild; skin : float (m). The list is
         rebuilt when an element has moved more than skin/2 since then.
     walls, wall_vel, wall_shear : moving segment walls (walls are advanced by wall_vel dt).
+    cand, n_cand : per-wall candidate lists (see build_wall_candidates), rebuilt with the
+        Verlet list; wall_disp : (1,) float64 distance the fastest wall moved since the last
+        rebuild. A rebuild happens when an element moved > skin/2 or a wall moved > skin/2,
+        so element-wall contacts cannot be missed.
     box : (4,) float64 [xmin, xmax, ymin, ymax]; an element centre outside stops the run.
     vmax_limit : float (m/s); a speed above it is reported as a kinetic-energy blow-up.
     check_every : int steps between the NaN / speed / box checks.
@@ -320,6 +406,9 @@ def run_steps(n_steps, dt, pos, vel, force, radius, mass, inv_mass, eta, gravity
     nw = walls.shape[0]
     half = 0.5 * dt
     lim2 = 0.25 * skin * skin
+    vw = 0.0
+    for w in range(nw):
+        vw = max(vw, np.sqrt(wall_vel[w, 0] ** 2 + wall_vel[w, 1] ** 2))
     n_rebuilds = 0
     n_broken = 0
     for step in range(n_steps):
@@ -339,7 +428,8 @@ def run_steps(n_steps, dt, pos, vel, force, radius, mass, inv_mass, eta, gravity
             walls[w, 1] += dt * wall_vel[w, 1]
             walls[w, 2] += dt * wall_vel[w, 0]
             walls[w, 3] += dt * wall_vel[w, 1]
-        if maxd2 > lim2:
+        wall_disp[0] += vw * dt
+        if maxd2 > lim2 or wall_disp[0] > 0.5 * skin:
             if not (maxd2 < 1e300):
                 return STATUS_NAN, step, _first_bad(pos, vel), n_rebuilds, n_broken
             st = build_neighbours(pos, radius, skin, nbr, n_nbr, shear, bond, new_nbr, new_n,
@@ -349,13 +439,16 @@ def run_steps(n_steps, dt, pos, vel, force, radius, mass, inv_mass, eta, gravity
             for i in range(n):
                 pos_ref[i, 0] = pos[i, 0]
                 pos_ref[i, 1] = pos[i, 1]
+            if nw > 0:
+                build_wall_candidates(pos, radius, walls, skin, cand, n_cand)
+            wall_disp[0] = 0.0
             n_rebuilds += 1
         body_forces(vel, mass, eta, gravity, force)
         n_broken += pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, kn, ks, mu, c0, r0,
                                 dt, force)
         if nw > 0:
-            wall_forces(pos, vel, radius, walls, wall_vel, wall_shear, wall_kn, ks, wall_mu,
-                        dt, force)
+            wall_forces_listed(pos, vel, radius, walls, wall_vel, wall_shear, wall_kn, ks,
+                               wall_mu, dt, force, cand, n_cand)
         for i in range(n):
             vel[i, 0] += half * force[i, 0] * inv_mass[i]
             vel[i, 1] += half * force[i, 1] * inv_mass[i]

@@ -113,6 +113,9 @@ class Engine:
         self.walls = np.zeros((0, 4))
         self.wall_vel = np.zeros((0, 2))
         self.wall_shear = np.zeros((n, 0))
+        self._wall_cand = np.zeros((0, n), np.int32)
+        self._wall_ncand = np.zeros(0, np.int32)
+        self._wall_disp = np.zeros(1)
         self.box = np.array([-np.inf, np.inf, -np.inf, np.inf])
         self.vmax_limit = 500.0
         self.check_every = 50
@@ -171,7 +174,16 @@ class Engine:
         self.wall_vel = np.ascontiguousarray(wall_vel, dtype=np.float64).reshape(nw, 2).copy()
         if self.wall_shear.shape != (self.n, nw):
             self.wall_shear = np.zeros((self.n, nw))
+        self._wall_cand = np.zeros((nw, self.n), np.int32)
+        self._wall_ncand = np.zeros(nw, np.int32)
+        self._refresh_wall_candidates()
         self._forces_valid = False
+
+    def _refresh_wall_candidates(self) -> None:
+        if self.walls.shape[0]:
+            K.build_wall_candidates(self.pos, self.radius, self.walls, self.skin,
+                                    self._wall_cand, self._wall_ncand)
+        self._wall_disp[0] = 0.0
 
     def rebuild(self) -> None:
         """Rebuild the Verlet list now (keeps pair history of pairs that stay listed)."""
@@ -184,6 +196,7 @@ class Engine:
                 break
             self._grow_capacity()
         self.pos_ref[:] = self.pos
+        self._refresh_wall_candidates()
         self._forces_valid = False
 
     def bond_initial_contacts(self, tol_frac: float = 0.05) -> int:
@@ -233,7 +246,8 @@ class Engine:
                 self._new_nbr, self._new_n, self._new_shear, self._new_bond,
                 self._cell_head, self._cell_next,
                 self.walls, self.wall_vel, self.wall_shear, self.box,
-                self.vmax_limit, self.check_every)
+                self.vmax_limit, self.check_every,
+                self._wall_cand, self._wall_ncand, self._wall_disp)
             done += k
             self.steps += k
             self.n_rebuilds += nreb
@@ -320,4 +334,5 @@ class Engine:
         self.shear[:n] = old[2]
         self.bond[:n] = old[3]
         self.wall_shear = np.vstack([self.wall_shear, np.zeros((m, self.walls.shape[0]))])
+        self._wall_cand = np.zeros((self.walls.shape[0], n + m), np.int32)
         self.rebuild()
