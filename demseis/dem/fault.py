@@ -113,8 +113,29 @@ def _deposit(eng: Engine, x_lo: float, x_hi: float, level_m: float, template_xy:
     keep = y - r > floor[col] + gap
     if not keep.any():
         return 0
+    # The column floor is a cut, not a guarantee: next to a scarp an existing disk whose centre
+    # is up to r + r_max away sideways can still reach the new disk. An overlap of metres is a
+    # force of ~1e11 N that blows the run up, so check every candidate against its neighbours.
+    keep[keep] = _clear_of(eng.pos, eng.radius, np.c_[x[keep], y[keep]], r[keep], gap)
+    if not keep.any():
+        return 0
     eng.add_elements(np.c_[x[keep], y[keep]], r[keep])
     return int(keep.sum())
+
+
+def _clear_of(pos: np.ndarray, radius: np.ndarray, new_xy: np.ndarray, new_r: np.ndarray,
+              gap: float) -> np.ndarray:
+    """(m,) bool: which new disks keep at least ``gap`` from every existing disk."""
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(pos)
+    reach = new_r + float(radius.max()) + gap
+    ok = np.ones(new_r.shape[0], dtype=bool)
+    for i, near in enumerate(tree.query_ball_point(new_xy, reach)):
+        if near:
+            d = np.hypot(*(pos[near] - new_xy[i]).T)
+            ok[i] = bool(np.all(d >= radius[near] + new_r[i] + gap))
+    return ok
 
 
 def simulate(asm: Assembly, fault: NormalFault, material: Material = Material(), *,
