@@ -12,8 +12,8 @@ What it does:
    Dice, Adam, for a wall-clock budget;
 2. predicts fault probabilities on the whole sections of the ``test`` split (DEM runs never seen
    in training) and writes ``unet_test.npy`` with ``test_indices.npy`` (store index of each row);
-3. runs the no-learning baseline (dip-scanned semblance) on the same test sections
-   (``baseline_test.npy``);
+3. runs the no-learning baseline (``--baseline-method``, default ``dip``: coherence-weighted
+   reflector dip; or ``semblance``) on the same test sections (``baseline_test.npy``);
 4. scores both with ``demseis score ... --indices test_indices.npy --by freq_hz,snr_db,dip_deg``
    and prints the tables (CSV and JSON land next to the predictions).
 
@@ -140,12 +140,13 @@ def train(args: argparse.Namespace) -> tuple[object, dict]:
     return model, log
 
 
-def run_score(pred: str, store: str, indices: str, tolerance: float, by: str) -> int:
+def run_score(pred: str, store: str, indices: str, tolerance: float, by: str,
+              bins: int) -> int:
     """``demseis score`` on predictions of the test samples (printed as a command line)."""
     from demseis.generator.cli import main
 
     argv = ["score", pred, store, "--indices", indices, "--tolerance", f"{tolerance:g}",
-            "--by", by]
+            "--by", by, "--bins", str(bins)]
     print("\n$ demseis " + " ".join(shlex.quote(a) for a in argv), flush=True)
     return main(argv)
 
@@ -163,12 +164,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--tolerance", type=float, default=2.0, help="scoring tolerance in pixels")
     ap.add_argument("--by", default="freq_hz,snr_db,dip_deg", help="scoring breakdown")
+    ap.add_argument("--bins", type=int, default=3, help="bins of drawn parameters (dip)")
+    ap.add_argument("--baseline-method", choices=("dip", "semblance"), default="dip")
     args = ap.parse_args(argv)
 
     import torch
 
     from demseis.datasets import FaultSegDataset
-    from demseis.labels.baseline import semblance_fault_probability
+    from demseis.labels.baseline import baseline_fault_probability
 
     os.makedirs(args.out_dir, exist_ok=True)
     model, _ = train(args)
@@ -183,10 +186,10 @@ def main(argv: list[str] | None = None) -> int:
     unet_path = os.path.join(args.out_dir, "unet_test.npy")
     np.save(unet_path, predict_sections(model, seis))
     base_path = os.path.join(args.out_dir, "baseline_test.npy")
-    np.save(base_path, semblance_fault_probability(seis))
+    np.save(base_path, baseline_fault_probability(seis, args.baseline_method))
     print(f"\npredicted {len(test)} test sections ({len(np.unique(test.run_ids))} runs)")
-    rc = run_score(base_path, args.store, idx_path, args.tolerance, args.by)
-    rc = rc or run_score(unet_path, args.store, idx_path, args.tolerance, args.by)
+    rc = run_score(base_path, args.store, idx_path, args.tolerance, args.by, args.bins)
+    rc = rc or run_score(unet_path, args.store, idx_path, args.tolerance, args.by, args.bins)
     return rc
 
 

@@ -52,19 +52,27 @@ def add_scoring_commands(sub: argparse._SubParsersAction) -> None:
 
     b = sub.add_parser(
         "baseline",
-        help="reference fault detector with no learning (dip-scanned semblance)",
-        description="Run the dip-scanned semblance detector over every completed sample of a "
-        "store and write fault probabilities of shape (N, H, W) (samples of incomplete shards "
-        "are 0). Call a fault at probability >= 0.5 (the default threshold of 'demseis score').",
+        help="reference fault detector with no learning (reflector dip or semblance)",
+        description="Run a no-learning fault detector over every completed sample of a store "
+        "and write fault probabilities of shape (N, H, W) (samples of incomplete shards are 0). "
+        "Methods: 'dip' (default; coherence-weighted reflector dip from the structure tensor: "
+        "demseis layers are deposited flat) or 'semblance' (dip-scanned semblance). Call a "
+        "fault at probability >= 0.5 (the default threshold of 'demseis score').",
     )
     b.add_argument("store", help="demseis Zarr store with a 'seismic' array")
     b.add_argument("--out", required=True, metavar="PRED",
                    help="output: PATH.npy for a NumPy file, anything else for a Zarr array")
     b.add_argument("--input", default="seismic", help="input array of the store (default seismic)")
-    b.add_argument("--half-traces", type=int, default=2)
-    b.add_argument("--half-samples", type=int, default=4)
+    b.add_argument("--method", choices=("dip", "semblance"), default="dip",
+                   help="detector (default dip)")
+    b.add_argument("--sigma-tensor", type=float, default=4.0,
+                   help="dip: structure-tensor smoothing in pixels (default 4)")
+    b.add_argument("--half-traces", type=int, default=2,
+                   help="semblance: window half-width in traces (default 2)")
+    b.add_argument("--half-samples", type=int, default=4,
+                   help="semblance: window half-height in samples (default 4)")
     b.add_argument("--max-slope", type=float, default=1.0,
-                   help="largest trial slope, samples per trace (default 1.0)")
+                   help="semblance: largest trial slope, samples per trace (default 1.0)")
     b.add_argument("--overwrite", action="store_true", help="replace an existing output")
     b.set_defaults(func=_baseline_command)
 
@@ -172,11 +180,25 @@ def _baseline_command(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from demseis.errors import StoreError
-    from demseis.labels.baseline import SemblanceBaseline, semblance_fault_probability
+    from demseis.labels.baseline import (
+        SemblanceBaseline,
+        dip_fault_probability,
+        semblance_fault_probability,
+    )
     from demseis.labels.scoring import _open_group, _valid_samples
 
     cfg = SemblanceBaseline(half_traces=args.half_traces, half_samples=args.half_samples,
                             max_slope=args.max_slope)
+    if args.method == "dip":
+        settings = {"method": "dip", "sigma_tensor_px": args.sigma_tensor}
+
+        def detect(sec: np.ndarray) -> np.ndarray:
+            return dip_fault_probability(sec, sigma_tensor_px=args.sigma_tensor)
+    else:
+        settings = {"method": "semblance", **cfg.__dict__}
+
+        def detect(sec: np.ndarray) -> np.ndarray:
+            return semblance_fault_probability(sec, cfg)
     root = _open_group(args.store)
     if args.input not in set(root.array_keys()):
         raise StoreError(f"store {args.store!r} has no {args.input!r} array; it holds "
@@ -195,11 +217,10 @@ def _baseline_command(args: argparse.Namespace) -> int:
     else:
         out = zarr.create_array(args.out + ".part", shape=(n, h, w), chunks=(1, h, w),
                                 dtype="float32", fill_value=0.0, overwrite=True)
-        out.attrs["demseis_baseline"] = {"method": "dip-scanned semblance",
-                                         "threshold": 0.5, **cfg.__dict__}
+        out.attrs["demseis_baseline"] = {"threshold": 0.5, **settings}
     done = np.flatnonzero(valid)
     for i in tqdm(done, desc="baseline", unit="sample", disable=not sys.stderr.isatty()):
-        out[int(i)] = semblance_fault_probability(np.asarray(seis[int(i)]), cfg)
+        out[int(i)] = detect(np.asarray(seis[int(i)]))
     if isinstance(out, np.memmap):  # a new memmap is zero-filled: skipped samples stay 0
         out.flush()
         del out

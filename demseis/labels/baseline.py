@@ -1,6 +1,16 @@
-"""A reference fault detector with no learning: the floor a model has to beat.
+"""Reference fault detectors with no learning: the floor a model has to beat.
 
-The attribute is *dip-scanned semblance* (Marfurt, Kirlin, Farmer & Bahorich, 1998, Geophysics
+Two attributes, both scaled to probabilities in [0, 1] with default threshold 0.5:
+
+- ``"dip"`` (default of ``demseis baseline``, :func:`dip_fault_probability`): reflector dip
+  from the structure tensor, weighted by its coherence. demseis layers are deposited flat, so
+  steep reflector segments mark fault drag, offsets and the fault plane itself. It is not a
+  general-purpose fault attribute (regional dip reads as faults), but it is the stronger floor
+  on demseis sections (docs/scoring.md has the measurements).
+- ``"semblance"`` (:func:`semblance_fault_probability`): dip-scanned semblance, the classic
+  lateral-discontinuity attribute, insensitive to regional dip, described below.
+
+The semblance attribute is *dip-scanned semblance* (Marfurt, Kirlin, Farmer & Bahorich, 1998, Geophysics
 63(4)): in a small window of neighbouring traces, semblance measures how alike the traces are
 along the best of a set of trial slopes, so continuous (also dipping) reflectors give values near
 1 and reflectors cut and offset by a fault give low values. With the discontinuity
@@ -27,7 +37,18 @@ from numpy.typing import ArrayLike, NDArray
 
 from demseis.errors import InputError
 
-__all__ = ["DEFAULT_C_REF", "DEFAULT_THRESHOLD", "SemblanceBaseline", "semblance_fault_probability"]
+__all__ = [
+    "DEFAULT_C_REF",
+    "DEFAULT_THRESHOLD",
+    "METHODS",
+    "SemblanceBaseline",
+    "baseline_fault_probability",
+    "dip_fault_probability",
+    "semblance_fault_probability",
+]
+
+#: baseline methods by name; "dip" is the default of ``demseis baseline``
+METHODS = ("dip", "semblance")
 
 #: probability at which the baseline calls a pixel a fault
 DEFAULT_THRESHOLD = 0.5
@@ -102,16 +123,7 @@ def semblance_fault_probability(section: ArrayLike,
     from demseis.labels._scoring_kernels import dip_scan_semblance
 
     cfg = config or SemblanceBaseline()
-    a = np.asarray(section)
-    if a.ndim not in (2, 3) or a.size == 0:
-        raise InputError(f"section: expected a non-empty (H, W) or (N, H, W) array, "
-                         f"got shape {a.shape}")
-    if not np.issubdtype(a.dtype, np.number):
-        raise InputError(f"section: expected numeric amplitudes, got dtype {a.dtype}")
-    stack = a[None] if a.ndim == 2 else a
-    stack = stack.astype(np.float64, copy=False)
-    if not np.isfinite(stack).all():
-        raise InputError("section: contains NaN or infinite amplitudes")
+    stack, two_d = _check_section(section)
     nwin = (2 * cfg.half_traces + 1) ** 2 * (2 * cfg.half_samples + 1)
     out = np.empty(stack.shape, np.float32)
     slopes = cfg.slopes()
@@ -127,4 +139,80 @@ def semblance_fault_probability(section: ArrayLike,
         d_med = float(np.median(d))
         scale = (1.0 - d_med) * (1.0 - cfg.c_ref)
         out[i] = np.clip((d - d_med) / scale, 0.0, 1.0) if scale > 0 else 0.0
-    return out if a.ndim == 3 else out[0]
+    return out[0] if two_d else out
+
+
+def dip_fault_probability(section: ArrayLike, *, sigma_grad_px: float = 1.0,
+                          sigma_tensor_px: float = 4.0,
+                          dip_scale: float = 0.5) -> NDArray[np.float32]:
+    """Fault probability from coherence-weighted reflector dip (structure tensor).
+
+    With Gaussian-derivative gradients ``g = (d/dz, d/dx)`` of the section (scale
+    ``sigma_grad_px``) and the structure tensor ``J = G_sigma * (g g^T)`` (scale
+    ``sigma_tensor_px``), the dominant gradient makes the angle
+    ``theta = 0.5 atan2(2 J_xz, J_zz - J_xx)`` with the vertical, which is the reflector dip,
+    and ``coh = sqrt((J_zz - J_xx)^2 + 4 J_xz^2) / (J_zz + J_xx)`` in [0, 1] says how
+    clearly oriented the reflections are (van Vliet & Verbeek, 1995). Then::
+
+        prob = clip(|sin theta| * coh / dip_scale, 0, 1)
+
+    so a clearly oriented reflector dipping 30 degrees (|sin| = 0.5) or more is probability 1.
+
+    Parameters
+    ----------
+    section : array_like, shape (H, W) or (N, H, W)
+        Seismic amplitude, rows depth samples, columns traces (square cells assumed).
+    sigma_grad_px, sigma_tensor_px : float
+        Gradient and tensor smoothing scales in pixels (> 0).
+    dip_scale : float
+        ``|sin(dip)| * coh`` mapped to probability 1, in (0, 1].
+
+    Returns
+    -------
+    ndarray, float32, same shape as ``section``
+    """
+    from scipy import ndimage
+
+    stack, two_d = _check_section(section)
+    for name, v in (("sigma_grad_px", sigma_grad_px), ("sigma_tensor_px", sigma_tensor_px)):
+        if not (np.isfinite(v) and v > 0):
+            raise InputError(f"{name}: must be a positive number of pixels, got {v!r}")
+    if not (0 < dip_scale <= 1):
+        raise InputError(f"dip_scale: must lie in (0, 1], got {dip_scale!r}")
+    out = np.empty(stack.shape, np.float32)
+    for i in range(stack.shape[0]):
+        s = stack[i]
+        gz = ndimage.gaussian_filter(s, sigma_grad_px, order=(1, 0))
+        gx = ndimage.gaussian_filter(s, sigma_grad_px, order=(0, 1))
+        jzz = ndimage.gaussian_filter(gz * gz, sigma_tensor_px)
+        jxx = ndimage.gaussian_filter(gx * gx, sigma_tensor_px)
+        jxz = ndimage.gaussian_filter(gx * gz, sigma_tensor_px)
+        theta = 0.5 * np.arctan2(2 * jxz, jzz - jxx)
+        trace = jzz + jxx
+        tiny = 1e-12 * max(float(trace.max()), 1e-300)
+        coh = np.sqrt((jzz - jxx) ** 2 + 4 * jxz**2) / np.maximum(trace, tiny)
+        coh = np.where(trace > tiny, coh, 0.0)
+        out[i] = np.clip(np.abs(np.sin(theta)) * coh / dip_scale, 0.0, 1.0)
+    return out[0] if two_d else out
+
+
+def _check_section(section: ArrayLike) -> tuple[NDArray[np.float64], bool]:
+    a = np.asarray(section)
+    if a.ndim not in (2, 3) or a.size == 0:
+        raise InputError(f"section: expected a non-empty (H, W) or (N, H, W) array, "
+                         f"got shape {a.shape}")
+    if not np.issubdtype(a.dtype, np.number):
+        raise InputError(f"section: expected numeric amplitudes, got dtype {a.dtype}")
+    stack = (a[None] if a.ndim == 2 else a).astype(np.float64, copy=False)
+    if not np.isfinite(stack).all():
+        raise InputError("section: contains NaN or infinite amplitudes")
+    return stack, a.ndim == 2
+
+
+def baseline_fault_probability(section: ArrayLike, method: str = "dip") -> NDArray[np.float32]:
+    """Fault probability by the named no-learning ``method`` (one of :data:`METHODS`)."""
+    if method == "dip":
+        return dip_fault_probability(section)
+    if method == "semblance":
+        return semblance_fault_probability(section)
+    raise InputError(f"method: must be one of {METHODS}, got {method!r}")

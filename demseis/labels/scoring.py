@@ -705,10 +705,12 @@ def group_rows(counts: SampleCounts, params: dict[str, NDArray[Any]], by: list[s
                bins: int = 4, zero_division: float = 0.0) -> list[dict[str, Any]]:
     """Scores per group of a sample parameter.
 
-    A parameter with at most :data:`MAX_CATEGORIES` distinct values, each held by two samples
-    or more on average (frequency, SNR: swept values), is grouped by value (``inf`` sorts last);
-    any other (dip, throw: drawn per run) is split into ``bins`` equal-width bins over its finite
-    range, labelled ``[lo, hi)`` (the last bin closed); non-finite values form their own group.
+    A parameter with at most :data:`MAX_CATEGORIES` distinct values that are all round (whole
+    hundredths, or infinite: swept lists such as ``freq_hz = [20, 40, 60]`` or
+    ``snr_db = [inf, 10]``) is grouped by value (``inf`` sorts last). Any other (values drawn
+    from a distribution, such as ``dip_deg`` or ``throw_m`` per run) is split into ``bins``
+    equal-width bins over its finite range, labelled ``[lo, hi)`` (the last bin closed);
+    non-finite values then form their own group.
 
     Parameters
     ----------
@@ -734,7 +736,9 @@ def group_rows(counts: SampleCounts, params: dict[str, NDArray[Any]], by: list[s
                              f"{sorted(params)}")
         v = np.asarray(params[name], dtype=np.float64)
         uniq = np.unique(v)  # NaN last, inf before NaN
-        if uniq.size <= MAX_CATEGORIES and 2 * uniq.size <= v.size:
+        fin = uniq[np.isfinite(uniq)]
+        round_ = bool(np.all(np.abs(fin - np.round(fin, 2)) <= 1e-6 * np.maximum(1, np.abs(fin))))
+        if uniq.size <= MAX_CATEGORIES and round_:
             for u in uniq:
                 mask = np.isnan(v) if np.isnan(u) else (v == u)
                 rows.append(_row(name, _fmt_value(u), float(u), float(u), counts.take(mask),

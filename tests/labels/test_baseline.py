@@ -127,12 +127,18 @@ def test_cli_baseline_then_score(tmp_path, capsys):
 
     zarr.open_group(str(tmp_path / "s.zarr"), mode="r+")["fault"][:] = np.stack(truths)
     out = tmp_path / "base.npy"
-    assert main(["baseline", str(tmp_path / "s.zarr"), "--out", str(out)]) == 0
+    assert main(["baseline", str(tmp_path / "s.zarr"), "--out", str(out), "--method",
+                 "semblance"]) == 0
     pred = np.load(out)
     assert pred.shape == (6, 32, 32)
     assert np.all(pred[4:] == 0)  # incomplete shard left empty
     assert np.allclose(pred[0], semblance_fault_probability(seismic[0]))
     assert main(["baseline", str(tmp_path / "s.zarr"), "--out", str(out)]) == 2  # exists
+    from demseis.labels.baseline import dip_fault_probability
+
+    dip = tmp_path / "dip.npy"
+    assert main(["baseline", str(tmp_path / "s.zarr"), "--out", str(dip)]) == 0  # default dip
+    assert np.allclose(np.load(dip)[1], dip_fault_probability(seismic[1]))
     capsys.readouterr()
     assert main(["score", str(out), str(tmp_path / "s.zarr"), "--tolerance", "2"]) == 0
     rep = json.loads((tmp_path / "base.score.json").read_text())
@@ -156,3 +162,30 @@ def zarr_shape(path):
     import zarr
 
     return tuple(zarr.open_array(str(path), mode="r").shape)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_dip_attribute_beats_chance_and_ignores_gentle_dip(seed):
+    from demseis.labels.baseline import dip_fault_probability
+
+    sec, truth = faulted_section(seed=seed)
+    prob = dip_fault_probability(sec)
+    assert prob.shape == sec.shape and 0 <= prob.min() and prob.max() <= 1
+    r = score(prob, truth, tolerance_px=2)
+    assert r.ap > 2 * r.chance_ap
+    clean, _ = faulted_section(seed=seed, fault=False)  # 0.1 samples/trace regional dip
+    assert (dip_fault_probability(clean) >= 0.5).mean() == 0.0
+
+
+def test_dip_attribute_reads_reflector_dip():
+    from demseis.labels.baseline import dip_fault_probability
+
+    trace = np.convolve(np.random.default_rng(2).normal(size=200), ricker(25, 0.004, 21), "same")
+    z = np.arange(80)[:, None]
+    x = np.arange(60)[None, :]
+    for slope, expect in ((0.0, 0.0), (np.tan(np.radians(30)), 1.0)):
+        u = np.interp(z + 60 - slope * x, np.arange(200), trace)
+        p = dip_fault_probability(u, dip_scale=0.5)[15:-15, 15:-15]
+        assert np.median(p) == pytest.approx(expect, abs=0.15)
+    with pytest.raises(InputError, match="dip_scale"):
+        dip_fault_probability(u, dip_scale=0)

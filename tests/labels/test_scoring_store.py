@@ -151,3 +151,19 @@ def test_cli_errors_exit_2(tmp_path, capsys, case):
               "by": "colour", "range": "[0, 1]"}[case]
     assert expect in err
     assert not (tmp_path / "pred.score.json").exists()
+
+
+def test_grouping_rule_swept_values_vs_drawn_values():
+    from demseis.labels.scoring import SampleCounts
+
+    n = 6
+    z = np.zeros(n, np.int64)
+    counts = SampleCounts(n_pred=z + 1, n_truth=z + 1, tp=z + 1, tp_truth=z + 1,
+                          n_near_truth=z + 1, n_pixels=z + 4, curve_n_pred=np.ones((n, 1), int),
+                          curve_tp=np.ones((n, 1), int), curve_tp_truth=np.ones((n, 1), int),
+                          thresholds=np.array([0.5]), threshold=0.5, tolerance_px=0.0)
+    params = {"dip_deg": np.repeat(np.float32([42.1659, 45.0286, 56.9102]), 2),
+              "swept": np.float32([45, 45, 60, 60, 0.1, 0.1])}
+    rows = group_rows(counts, params, ["dip_deg", "swept"], bins=2)
+    assert [r["group"] for r in rows if r["by"] == "dip_deg"] == ["[42.2, 49.5)", "[49.5, 56.9]"]
+    assert [r["group"] for r in rows if r["by"] == "swept"] == ["0.1", "45", "60"]
