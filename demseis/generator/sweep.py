@@ -157,8 +157,8 @@ def warm_numba_cache() -> None:
     from demseis.generator.sampling import plan_run
 
     raw_cfg = load_config(preset="tiny").to_dict()
-    raw_cfg["sweep"]["n_runs"] = 1
-    raw_cfg["model"]["n_snapshots"] = 2
+    raw_cfg["sweep"].update(n_runs=1, n_layers=2, throw_m=20.0, dip_deg=60.0)
+    raw_cfg["model"].update(n_snapshots=2, width_m=300.0, height_m=200.0)
     cfg = parse_config(raw_cfg)
     spec = plan_run(cfg, 0)
     snaps, info = simulate_run(cfg, spec)
@@ -285,7 +285,20 @@ def _run_distributed(store: str, cfg_dict: dict[str, Any], pending: list[int], s
     if remote is not None:
         client = remote
     else:
-        warm_numba_cache()
+        # warm the Numba cache while the worker processes start: tasks are submitted only
+        # after both, so no worker compiles a kernel the driver is compiling
+        import threading
+
+        warm_errors: list[BaseException] = []
+
+        def warm() -> None:
+            try:
+                warm_numba_cache()
+            except BaseException as exc:  # re-raised in the driver below
+                warm_errors.append(exc)
+
+        warmer = threading.Thread(target=warm, name="demseis-warm-numba")
+        warmer.start()
         n = workers or os.cpu_count() or 1
         env = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
                "OPENBLAS_NUM_THREADS": "1"}
@@ -295,6 +308,11 @@ def _run_distributed(store: str, cfg_dict: dict[str, Any], pending: list[int], s
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                    dashboard_address=None, env=env, silence_logs=40)
             client = Client(cluster)
+        warmer.join()
+        if warm_errors:
+            client.close()
+            cluster.close()
+            raise warm_errors[0]
     try:
         t_compute = time.perf_counter()
         futures = client.map(shard_task, [store] * len(pending), [cfg_dict] * len(pending), pending,
