@@ -470,14 +470,12 @@ def preset_path(name: str) -> Path:
 
 
 def load_config(path: str | Path | None = None, *, preset: str | None = None) -> Config:
-    """Load a TOML config file, or a preset, or the ``quick`` default; validate it.
+    """Load a TOML config file layered on a preset (default ``quick``); validate it.
 
-    With both a path and a preset, the file's keys override the preset's.
+    Every key of the file overrides the preset's; keys it does not give keep the preset's
+    values, so a file may be as short as ``[sweep] n_runs = 100``.
     """
-    raw: dict[str, Any] = {}
-    if preset is not None or path is None:
-        ppath = preset_path(preset or "quick")
-        raw = tomllib.loads(ppath.read_text())
+    raw = tomllib.loads(preset_path(preset or "quick").read_text())
     if path is not None:
         p = Path(path)
         if not p.is_file():

@@ -126,3 +126,13 @@ def test_file_overrides_preset(tmp_path):
 def test_configerror_is_valueerror():
     with pytest.raises(ConfigError):
         parse_config({"sweep": {"dip_deg": 120}})
+
+
+def test_file_without_preset_layers_on_quick(tmp_path):
+    f = tmp_path / "c.toml"
+    f.write_text("[sweep]\nn_runs = 30\nseed = 1\n")
+    cfg = load_config(f)
+    quick = load_config(preset="quick")
+    assert cfg.sweep.n_runs == 30 and cfg.sweep.seed == 1
+    assert cfg.sweep.params == quick.sweep.params
+    assert cfg.model == quick.model and cfg.samples_per_run == quick.samples_per_run == 12
