@@ -241,7 +241,7 @@ def run_sweep(
             if workers == 0 and scheduler is None:
                 t_compute = time.perf_counter()
                 for shard in pending:
-                    _account(summary, bar, shard_task(str(out), cfg_dict, shard), None)
+                    _account(summary, bar, shard_task(str(out), cfg_dict, shard))
                 summary.compute_seconds = time.perf_counter() - t_compute
             else:
                 _run_distributed(str(out), cfg_dict, pending, summary, bar, workers, remote, retries)
@@ -255,10 +255,8 @@ def run_sweep(
     return summary
 
 
-def _account(summary: SweepSummary, bar: Any, result: dict[str, Any] | None, error: str | None) -> None:
-    if error is not None:
-        return
-    assert result is not None
+def _account(summary: SweepSummary, bar: Any, result: dict[str, Any]) -> None:
+    """Book one finished task's result (written shard, or a run recorded as failed)."""
     if "error" in result:
         summary.failed[result["shard"]] = result["error"]
     else:
@@ -321,7 +319,7 @@ def _run_distributed(store: str, cfg_dict: dict[str, Any], pending: list[int], s
         shard_of = {f.key: s for f, s in zip(futures, pending)}
         for fut in as_completed(futures):
             if fut.status == "finished":
-                _account(summary, bar, fut.result(), None)
+                _account(summary, bar, fut.result())
             else:
                 exc = fut.exception()
                 summary.failed[shard_of[fut.key]] = f"{type(exc).__name__}: {exc}"
