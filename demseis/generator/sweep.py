@@ -165,6 +165,21 @@ def warm_numba_cache() -> None:
     render_run(cfg, spec, snaps, info)
 
 
+def run_cost(cfg: Config, run: int) -> float:
+    """Relative cost of DEM run ``run``: integrator steps to the target throw plus settling.
+
+    Steps = path along dip / wall speed / dt, with dt = 0.25 sqrt(m_min / Kn) (Eq. 5); the
+    element count is the same for every run of a sweep. Used to start the longest runs first.
+    """
+    from demseis.generator.sampling import run_params
+
+    p = run_params(cfg, run)
+    m = cfg.model
+    dt = 0.25 * math.sqrt(p["density_kg_m3"] * math.pi * m.radius_min_m**2 / p["kn_n_m"])
+    path_m = p["throw_m"] / math.sin(math.radians(p["dip_deg"]))
+    return (path_m / m.wall_speed_m_s + 4.0) / dt
+
+
 def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
     """Human lines describing the sweep without computing it."""
     grid = grid_of(cfg)
@@ -313,10 +328,13 @@ def _run_distributed(store: str, cfg_dict: dict[str, Any], pending: list[int], s
             raise warm_errors[0]
     try:
         t_compute = time.perf_counter()
-        futures = client.map(shard_task, [store] * len(pending), [cfg_dict] * len(pending), pending,
-                             retries=retries, pure=False,
-                             key=[f"demseis-shard-{s}-{os.getpid()}" for s in pending])
-        shard_of = {f.key: s for f, s in zip(futures, pending)}
+        # longest runs first (LPT): fewer workers idle at the end of a sweep of unequal runs
+        cfg = parse_config(cfg_dict)
+        order = sorted(pending, key=lambda s: -run_cost(cfg, s))
+        futures = [client.submit(shard_task, store, cfg_dict, s, retries=retries, pure=False,
+                                 priority=len(order) - rank, key=f"demseis-shard-{s}-{os.getpid()}")
+                   for rank, s in enumerate(order)]
+        shard_of = {f.key: s for f, s in zip(futures, order)}
         for fut in as_completed(futures):
             if fut.status == "finished":
                 _account(summary, bar, fut.result())
