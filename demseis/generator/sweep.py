@@ -30,8 +30,11 @@ from demseis.generator.pipeline import (
     sample_shape,
 )
 
-#: element-steps per second of one core, used only for ``--dry-run`` time estimates
-DRY_RUN_ELEMENT_STEPS_PER_S = 5.0e6
+#: ``--dry-run`` cost model, fitted to the seed-scale run measured by benchmarks/dem_seed.py
+#: (11,224 elements: 25.8 s faulting for ~45,900 steps, 15.7 s settling, one core)
+DRY_RUN_ELEMENT_STEPS_PER_S = 2.0e7
+DRY_RUN_SETTLE_S_PER_ELEMENT = 1.4e-3
+DRY_RUN_PACKING = 0.86
 
 
 @dataclass
@@ -188,18 +191,20 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
     h, w = sample_shape(cfg)
     bytes_per_sample = sum(np.dtype(d).itemsize for d in array_dtypes(cfg).values()) * h * w
     m = cfg.model
-    mean_r2 = (m.radius_min_m**2 + m.radius_min_m * m.radius_max_m + m.radius_max_m**2) / 3
-    n_elem = 0.82 * m.width_m * m.height_m / (math.pi * mean_r2)
+    # radii are log-uniform (demseis.dem.assembly): E[r^2] = (b^2 - a^2) / (2 ln(b / a))
+    a, b = m.radius_min_m, m.radius_max_m
+    mean_r2 = a * a if b <= a else (b * b - a * a) / (2.0 * math.log(b / a))
+    n_elem = DRY_RUN_PACKING * m.width_m * m.height_m / (math.pi * mean_r2)
     from demseis.generator.params import spec_values_hint
 
     throw_hi = spec_values_hint(cfg.sweep.params["throw_m"])[1]
     dip_lo = spec_values_hint(cfg.sweep.params["dip_deg"])[0]
     kn_lo = spec_values_hint(cfg.sweep.params["kn_n_m"])[0]
     rho_hi = spec_values_hint(cfg.sweep.params["density_kg_m3"])[1]
-    dt = 0.25 * math.sqrt(rho_hi * math.pi * m.radius_min_m**2 / kn_lo)
+    dt = 0.25 * math.sqrt(rho_hi * math.pi * a**2 / kn_lo)
     path_m = throw_hi / math.sin(math.radians(dip_lo))
-    steps = path_m / m.wall_speed_m_s / dt + 20000
-    secs = n_elem * steps / DRY_RUN_ELEMENT_STEPS_PER_S
+    steps = path_m / m.wall_speed_m_s / dt
+    secs = n_elem * (steps / DRY_RUN_ELEMENT_STEPS_PER_S + DRY_RUN_SETTLE_S_PER_ELEMENT)
     return [
         f"config: {cfg.name} (seed {cfg.sweep.seed})",
         f"DEM runs: {n_runs} to compute (of {cfg.sweep.n_runs}); ~{n_elem:,.0f} elements each",
@@ -210,7 +215,7 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
         f"size on disk: at most {n_runs * S * bytes_per_sample / 2**20:,.1f} MiB (uncompressed) "
         "plus particle snapshots",
         f"estimated time: up to ~{secs * n_runs / 60:,.1f} core-minutes "
-        f"(~{secs:,.0f} s per run on one core at most, at {DRY_RUN_ELEMENT_STEPS_PER_S:.0e} element-steps/s)",
+        f"(~{secs:,.0f} s per run on one core at most; divide by the worker count for wall time)",
     ]
 
 
