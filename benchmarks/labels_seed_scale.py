@@ -47,7 +47,12 @@ def main() -> None:
     import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
 
-    from demseis.labels import LabelConfig, label_maps, mask_thickness_cells, strain_history
+    from demseis.labels import (
+        LabelConfig,
+        label_maps,
+        mask_thickness_cells,
+        strain_history,
+    )
     from demseis.seismic import (
         Grid,
         PropertyModel,

@@ -77,7 +77,7 @@ def prune_spurs(skel: np.ndarray, max_len: int) -> np.ndarray:
         return skel
     sizes = np.bincount(lab.ravel(), minlength=nlab + 1)
     near_j = ndimage.binary_dilation(junction, structure=_EIGHT, iterations=2)
-    jlab, njl = ndimage.label(near_j, structure=_EIGHT)
+    jlab, _ = ndimage.label(near_j, structure=_EIGHT)
     ends = (cn == 1) & skel
     has_end = np.zeros(nlab + 1, dtype=bool)
     has_end[np.unique(lab[ends & (lab > 0)])] = True
@@ -120,7 +120,7 @@ def smooth_skeleton(skel: np.ndarray, window_cells: int) -> np.ndarray:
     junction = crossing_number(skel) >= 3
     body = skel & ~junction
     out = junction.copy()
-    lab, nlab = ndimage.label(body, structure=_EIGHT)
+    lab, _ = ndimage.label(body, structure=_EIGHT)
     objs = ndimage.find_objects(lab)
     for k, sl in enumerate(objs, start=1):
         if sl is None:
