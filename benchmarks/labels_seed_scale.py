@@ -19,18 +19,24 @@ import numpy as np
 
 
 def _snapshots(path: str | None):
+    """Pickled snapshots, or run 0 of the ``seed`` preset through the generator's DEM step
+    (the current DEM defaults: 5 km x 2.77 km, 48 layers, 45 deg fault, 450 m throw)."""
     if path:
         with open(path, "rb") as fh:
             return pickle.load(fh)
-    from demseis.dem import Material, NormalFault, build_assembly, simulate
+    from demseis.generator.config import load_config
+    from demseis.generator.pipeline import simulate_run
+    from demseis.generator.sampling import plan_run
 
-    asm = build_assembly(5000.0, 2770.0, n_layers=48, rng=np.random.default_rng(0))
-    return simulate(asm, NormalFault(), Material(), n_snapshots=6, rng=np.random.default_rng(1))
+    cfg = load_config(preset="seed")
+    snaps, _ = simulate_run(cfg, plan_run(cfg, 0))
+    return snaps
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--snapshots", default=None)
+    ap.add_argument("--snapshots", default=None, help="pickled list of Snapshot (else run the DEM)")
+    ap.add_argument("--save-snapshots", default=None, help="pickle the DEM snapshots here")
     ap.add_argument("--figure", default="docs/figures/labels_seed_scale.png")
     ap.add_argument("--freq-hz", type=float, default=40.0)
     args = ap.parse_args()
@@ -41,7 +47,12 @@ def main() -> None:
     import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
 
-    from demseis.labels import LabelConfig, label_maps, mask_thickness_cells, strain_history
+    from demseis.labels import (
+        LabelConfig,
+        label_maps,
+        mask_thickness_cells,
+        strain_history,
+    )
     from demseis.seismic import (
         Grid,
         PropertyModel,
@@ -52,6 +63,9 @@ def main() -> None:
     )
 
     snaps = _snapshots(args.snapshots)
+    if args.save_snapshots:
+        with open(args.save_snapshots, "wb") as fh:
+            pickle.dump(snaps, fh)
     cfg = LabelConfig()
     grid = Grid.covering(5000.0, 2770.0, 10.0)
     t0 = time.perf_counter()
@@ -77,6 +91,21 @@ def main() -> None:
         f = label_maps(last, hl, grid, LabelConfig(thickness_cells=t))["fault"]
         control[str(t)] = {"measured_cells": _r(mask_thickness_cells(f)), "cells": int(f.sum())}
     out["thickness_control_final"] = control
+    # threshold check: fault cells / 8-connected components per snapshot, damage share of rock
+    from scipy import ndimage
+
+    sweep = {}
+    for ft, dt in ((0.5, 0.3), (0.75, 0.3), (1.0, 0.3), (0.5, 0.15), (0.5, 0.5)):
+        c = LabelConfig(fault_threshold=ft, damage_threshold=dt)
+        rows = []
+        for s, h in zip(snaps[1:], hist[1:]):
+            mm = label_maps(s, h, grid, c)
+            rock = int((mm["layer"] >= 0).sum())
+            rows.append([int(mm["fault"].sum()),
+                         int(ndimage.label(mm["fault"], structure=np.ones((3, 3)))[1]),
+                         round(float((mm["damage"] >= 1).sum()) / rock, 3)])
+        sweep[f"fault>={ft},damage>={dt}"] = rows
+    out["threshold_sweep_[fault_cells,components,damage_share]_snapshots_1_on"] = sweep
 
     # seismic of the final snapshot
     model = PropertyModel()

@@ -61,7 +61,10 @@ def _trace(pixels: set, start: tuple[int, int]) -> list[tuple[int, int]]:
 def prune_spurs(skel: np.ndarray, max_len: int) -> np.ndarray:
     """Remove branches of at most ``max_len`` cells that run from an end point to a junction.
 
-    Isolated paths (no junction) are kept whatever their length.
+    Isolated paths (no junction) are kept whatever their length. Where every branch of a
+    junction but one is such a short end branch, the junction is the fork that thinning leaves
+    at the end of a line (the two corners of the band's end): the longest of the short branches
+    is kept there, so the line still reaches the end of its band; the others are removed.
     """
     skel = np.asarray(skel, dtype=bool).copy()
     if max_len <= 0 or not skel.any():
@@ -74,16 +77,25 @@ def prune_spurs(skel: np.ndarray, max_len: int) -> np.ndarray:
         return skel
     sizes = np.bincount(lab.ravel(), minlength=nlab + 1)
     near_j = ndimage.binary_dilation(junction, structure=_EIGHT, iterations=2)
-    touches = np.zeros(nlab + 1, dtype=bool)
-    touches[np.unique(lab[near_j & (lab > 0)])] = True
+    jlab, _ = ndimage.label(near_j, structure=_EIGHT)
     ends = (cn == 1) & skel
     has_end = np.zeros(nlab + 1, dtype=bool)
     has_end[np.unique(lab[ends & (lab > 0)])] = True
-    drop = touches & has_end & (sizes <= max_len)
-    drop[0] = False
+    short_end = has_end & (sizes <= max_len)
+    short_end[0] = False
+    # branches touching each junction zone: pairs (junction zone, branch)
+    both = (jlab > 0) & (lab > 0)
+    pairs = np.unique(np.column_stack([jlab[both], lab[both]]), axis=0)
+    drop = np.zeros(nlab + 1, dtype=bool)
+    for jz in np.unique(pairs[:, 0]) if pairs.size else []:
+        br = pairs[pairs[:, 0] == jz, 1]
+        cand = br[short_end[br]]
+        if cand.size == 0:
+            continue
+        if cand.size == br.size - 1 and br.size >= 2:
+            cand = cand[np.argsort(sizes[cand], kind="stable")][:-1]  # keep the longest
+        drop[cand] = True
     skel[drop[lab]] = False
-    # re-thin junction leftovers: isolated stubs of the junction ring are removed by the caller's
-    # distance band; nothing else to do here
     return skel
 
 
@@ -108,7 +120,7 @@ def smooth_skeleton(skel: np.ndarray, window_cells: int) -> np.ndarray:
     junction = crossing_number(skel) >= 3
     body = skel & ~junction
     out = junction.copy()
-    lab, nlab = ndimage.label(body, structure=_EIGHT)
+    lab, _ = ndimage.label(body, structure=_EIGHT)
     objs = ndimage.find_objects(lab)
     for k, sl in enumerate(objs, start=1):
         if sl is None:
@@ -150,3 +162,4 @@ def smooth_skeleton(skel: np.ndarray, window_cells: int) -> np.ndarray:
         for p in rest:  # pixels the walk did not reach (tiny side loops): keep
             out[p] = True
     return out
+

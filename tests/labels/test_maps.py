@@ -36,39 +36,60 @@ def line_metrics(fault, grid, dip, slip, tol_cells=2.0):
     """(fraction of mask cells within tol of the line, fraction of the line covered).
 
     Only the part of the section where both walls are present is scored: below the hanging
-    wall's lowered top (H - slip sin(dip)); above it the footwall's free scarp is not the line.
-    A point of the line is covered when a mask cell lies within tol_cells of it.
+    wall's lowered top (H - slip sin(dip); above it the footwall's free scarp faces air) and
+    right of its trailing left edge (moved to x = slip cos(dip); left of it the footwall faces
+    the void the hanging wall left, which matters where the line leaves through the left side,
+    i.e. at 30 deg). A point of the line is covered when a mask cell lies within tol_cells of it.
     """
-    top = H - slip * np.sin(np.radians(dip)) - 2 * grid.cell_m
+    th = np.radians(dip)
+    top = H - slip * np.sin(th) - 2 * grid.cell_m
+    left = slip * np.cos(th) + 2 * grid.cell_m
     zz, xx = np.meshgrid(grid.y_centres(), grid.x_centres(), indexing="ij")
-    f = fault.astype(bool) & (zz < top)
+    f = fault.astype(bool) & (zz < top) & (xx > left)
     pts = np.column_stack([xx[f], zz[f]])
     assert pts.shape[0] > 0
     d = np.abs(fault_signed_distance(pts, XF, dip)) / grid.cell_m
-    th = np.radians(dip)
     s = np.linspace(0.0, H / np.sin(th), 4000)
     lp = np.column_stack([XF - s * np.cos(th), s * np.sin(th)])
-    lp = lp[(lp[:, 0] > 0) & (lp[:, 1] < top)]
+    lp = lp[(lp[:, 0] > left) & (lp[:, 1] < top)]
     dd, _ = cKDTree(pts).query(lp)
     return float((d <= tol_cells).mean()), float((dd <= tol_cells * grid.cell_m).mean())
 
 
-@pytest.mark.parametrize("dip", [45.0, 60.0])
-def test_kinematic_fault_mask_lies_on_the_line(pack_fault, dip):
+@pytest.mark.parametrize("dip, slip", [(30.0, 150.0), (30.0, 300.0), (45.0, 150.0),
+                                       (60.0, 150.0)])
+def test_kinematic_fault_mask_lies_on_the_line(pack_fault, dip, slip):
     grid = Grid.covering(W, H, 10.0)
     for xy, r in pack_fault:
-        slip = 150.0
         cur = kinematic_fault(xy, x_m=XF, dip_deg=dip, slip_m=slip)
         res = element_strain(xy, cur, r)
         maps = label_maps(snap_of(cur, r), res.gamma_max, grid, LabelConfig())
         on_line, covered = line_metrics(maps["fault"], grid, dip, slip)
-        assert on_line >= 0.9, (dip, on_line)
-        assert covered >= 0.9, (dip, covered)
+        assert on_line >= 0.9, (dip, slip, on_line)
+        assert covered >= 0.9, (dip, slip, covered)
         # no fault far from the line
         zz, xx = np.meshgrid(grid.y_centres(), grid.x_centres(), indexing="ij")
         f = maps["fault"].astype(bool)
         d = np.abs(fault_signed_distance(np.column_stack([xx[f], zz[f]]), XF, dip))
         assert d.max() < 120.0
+
+
+def test_prune_keeps_the_line_end_and_drops_side_spurs():
+    from demseis.labels.centreline import prune_spurs
+
+    sk = np.zeros((40, 80), dtype=bool)
+    sk[20, 5:60] = True  # main line, 55 cells
+    for k in range(1, 9):  # side spur off the middle: 8 cells up-right from (20, 30)
+        sk[20 - k, 30 + k] = True
+    # end fork at (20, 59): a 10-cell branch on along the line, a 6-cell one down-right
+    sk[20, 60:70] = True
+    for k in range(1, 7):
+        sk[20 + k, 59 + k] = True
+    out = prune_spurs(sk, 15)
+    assert not out[12, 38] and not out[15, 35]  # side spur gone
+    assert out[20, 69] and out[20, 64]  # the longer end branch is kept: the line reaches x = 69
+    assert not out[26, 65] and not out[24, 63]  # the shorter one is gone
+    assert out[20, 5:60].all()
 
 
 def test_thickness_control_is_monotonic_and_near_target(pack_fault):
