@@ -22,7 +22,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from demseis.errors import ConfigError
 
@@ -144,11 +143,13 @@ class DistSpec:
             x = rng.uniform(self.low, self.high)
         elif self.dist == "loguniform":
             x = math.exp(rng.uniform(math.log(self.low), math.log(self.high)))
-        else:  # truncnormal
+        else:  # truncnormal, by inversion: x = mean + std * Phi^-1(Phi(a) + u (Phi(b) - Phi(a)))
+            from scipy.special import ndtr, ndtri  # scipy.stats costs 0.6 s to import
+
             a = (self.low - self.mean) / self.std
             b = (self.high - self.mean) / self.std
             u = rng.uniform()
-            x = float(stats.truncnorm.ppf(u, a, b, loc=self.mean, scale=self.std))
+            x = self.mean + self.std * float(ndtri(ndtr(a) + u * (ndtr(b) - ndtr(a))))
             x = min(max(x, self.low), self.high)
         if self.kind is int:
             return int(round(x))
