@@ -213,6 +213,44 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, kn, ks, mu, c0, r0, d
     return nbroken
 
 
+@njit(cache=True, inline="always")
+def _wall_contact(i, w, ax, ay, ex, ey, l2, pos, vel, radius, wall_vel, wall_shear, kn, ks, mu,
+                  dt, force):
+    """Force of wall ``w`` (segment from (ax, ay) along (ex, ey), squared length l2) on element
+    ``i``, accumulated into ``force``; updates the X_s history ``wall_shear[i, w]``."""
+    px = pos[i, 0] - ax
+    py = pos[i, 1] - ay
+    s = (px * ex + py * ey) / l2
+    if s < 0.0:
+        s = 0.0
+    elif s > 1.0:
+        s = 1.0
+    dx = px - s * ex
+    dy = py - s * ey
+    d2 = dx * dx + dy * dy
+    ri = radius[i]
+    if d2 >= ri * ri or d2 == 0.0:
+        wall_shear[i, w] = 0.0
+        return
+    d = np.sqrt(d2)
+    nx = dx / d
+    ny = dy / d
+    fn = kn * (ri - d)
+    vt = (vel[i, 0] - wall_vel[w, 0]) * (-ny) + (vel[i, 1] - wall_vel[w, 1]) * nx
+    xs = wall_shear[i, w] + vt * dt
+    fs = -ks * xs
+    cap = mu * fn
+    if fs > cap:
+        fs = cap
+        xs = -cap / ks
+    elif fs < -cap:
+        fs = -cap
+        xs = cap / ks
+    wall_shear[i, w] = xs
+    force[i, 0] += fn * nx - fs * ny
+    force[i, 1] += fn * ny + fs * nx
+
+
 @njit(cache=True)
 def wall_forces(pos, vel, radius, walls, wall_vel, wall_shear, kn, ks, mu, dt, force):
     """Add disk-segment wall forces (normal spring + frictional slider, no cohesion).
@@ -239,38 +277,8 @@ def wall_forces(pos, vel, radius, walls, wall_vel, wall_shear, kn, ks, mu, dt, f
         ey = walls[w, 3] - ay
         l2 = ex * ex + ey * ey
         for i in range(n):
-            px = pos[i, 0] - ax
-            py = pos[i, 1] - ay
-            s = (px * ex + py * ey) / l2
-            if s < 0.0:
-                s = 0.0
-            elif s > 1.0:
-                s = 1.0
-            dx = px - s * ex
-            dy = py - s * ey
-            d2 = dx * dx + dy * dy
-            ri = radius[i]
-            if d2 >= ri * ri or d2 == 0.0:
-                wall_shear[i, w] = 0.0
-                continue
-            d = np.sqrt(d2)
-            nx = dx / d
-            ny = dy / d
-            fn = kn * (ri - d)
-            vt = (vel[i, 0] - wall_vel[w, 0]) * (-ny) + (vel[i, 1] - wall_vel[w, 1]) * nx
-            xs = wall_shear[i, w] + vt * dt
-            fs = -ks * xs
-            cap = mu * fn
-            if fs > cap:
-                fs = cap
-                xs = -cap / ks
-            elif fs < -cap:
-                fs = -cap
-                xs = cap / ks
-            wall_shear[i, w] = xs
-            force[i, 0] += fn * nx - fs * ny
-            force[i, 1] += fn * ny + fs * nx
-
+            _wall_contact(i, w, ax, ay, ex, ey, l2, pos, vel, radius, wall_vel, wall_shear, kn, ks,
+                          mu, dt, force)
 
 @njit(cache=True)
 def build_wall_candidates(pos, radius, walls, skin, cand, n_cand):
@@ -320,38 +328,8 @@ def wall_forces_listed(pos, vel, radius, walls, wall_vel, wall_shear, kn, ks, mu
         l2 = ex * ex + ey * ey
         for q in range(n_cand[w]):
             i = cand[w, q]
-            px = pos[i, 0] - ax
-            py = pos[i, 1] - ay
-            s = (px * ex + py * ey) / l2
-            if s < 0.0:
-                s = 0.0
-            elif s > 1.0:
-                s = 1.0
-            dx = px - s * ex
-            dy = py - s * ey
-            d2 = dx * dx + dy * dy
-            ri = radius[i]
-            if d2 >= ri * ri or d2 == 0.0:
-                wall_shear[i, w] = 0.0
-                continue
-            d = np.sqrt(d2)
-            nx = dx / d
-            ny = dy / d
-            fn = kn * (ri - d)
-            vt = (vel[i, 0] - wall_vel[w, 0]) * (-ny) + (vel[i, 1] - wall_vel[w, 1]) * nx
-            xs = wall_shear[i, w] + vt * dt
-            fs = -ks * xs
-            cap = mu * fn
-            if fs > cap:
-                fs = cap
-                xs = -cap / ks
-            elif fs < -cap:
-                fs = -cap
-                xs = cap / ks
-            wall_shear[i, w] = xs
-            force[i, 0] += fn * nx - fs * ny
-            force[i, 1] += fn * ny + fs * nx
-
+            _wall_contact(i, w, ax, ay, ex, ey, l2, pos, vel, radius, wall_vel, wall_shear, kn, ks,
+                          mu, dt, force)
 
 @njit(cache=True)
 def body_forces(vel, mass, eta, gravity, force):

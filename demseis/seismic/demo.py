@@ -9,27 +9,9 @@ increment. There is no drag, no damage zone and no force balance: faulting here 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-
-@dataclass(frozen=True)
-class ToySnapshot:
-    """Element arrays of one toy snapshot, with the fields of :class:`demseis.dem.Snapshot`
-    that the seismic stage reads."""
-
-    index: int
-    throw_m: float
-    ids: np.ndarray
-    xy: np.ndarray
-    radius: np.ndarray
-    layer: np.ndarray
-    deposited: np.ndarray
-
-    @property
-    def n(self) -> int:
-        return int(self.ids.shape[0])
+from demseis.dem.types import Snapshot
 
 
 def _hex_points(x0: float, x1: float, y0: float, y1: float, spacing: float,
@@ -48,7 +30,7 @@ def _hex_points(x0: float, x1: float, y0: float, y1: float, spacing: float,
 
 def layered_pack(width_m: float = 5000.0, height_m: float = 2770.0, n_layers: int = 48,
                  radius_min_m: float = 12.5, radius_max_m: float = 25.0,
-                 rng: np.random.Generator | None = None) -> ToySnapshot:
+                 rng: np.random.Generator | None = None) -> Snapshot:
     """An undeformed pack: hexagonal lattice (spacing 2.04 x mean radius), jittered, radii
     uniform, layers of equal thickness numbered from the base (0) up."""
     rng = np.random.default_rng(0) if rng is None else rng
@@ -57,14 +39,14 @@ def layered_pack(width_m: float = 5000.0, height_m: float = 2770.0, n_layers: in
     radius = rng.uniform(radius_min_m, radius_max_m, xy.shape[0])
     layer = np.minimum((xy[:, 1] / height_m * n_layers).astype(np.int64), n_layers - 1)
     n = xy.shape[0]
-    return ToySnapshot(0, 0.0, np.arange(n, dtype=np.int64), xy, radius,
+    return Snapshot(0, 0, 0.0, np.arange(n, dtype=np.int64), xy, radius,
                        layer.astype(np.int16), np.zeros(n, dtype=bool))
 
 
 def faulted_sequence(width_m: float = 5000.0, height_m: float = 2770.0, n_layers: int = 48,
                      throw_m: float = 450.0, dip_deg: float = 60.0, x_fault_m: float | None = None,
                      n_snapshots: int = 6, radius_min_m: float = 12.5, radius_max_m: float = 25.0,
-                     rng: np.random.Generator | None = None) -> list[ToySnapshot]:
+                     rng: np.random.Generator | None = None) -> list[Snapshot]:
     """Snapshots of a pack cut by a right-dipping normal fault at throws ``k/(n-1) throw_m``.
 
     The fault passes through ``(x_fault_m, 0)`` (default 0.6 width) and dips right at
@@ -82,7 +64,7 @@ def faulted_sequence(width_m: float = 5000.0, height_m: float = 2770.0, n_layers
                                    base.deposited)
     # hanging-wall membership is decided once, in the undeformed state, and moves with it
     hanging = xy[:, 0] > x_fault_m - xy[:, 1] / tan
-    snaps = [ToySnapshot(0, 0.0, ids, xy.copy(), radius, layer, dep)]
+    snaps = [Snapshot(0, 0, 0.0, ids, xy.copy(), radius, layer, dep)]
     done = 0.0
     next_id = int(ids.max()) + 1
     for k in range(1, n_snapshots):
@@ -103,5 +85,5 @@ def faulted_sequence(width_m: float = 5000.0, height_m: float = 2770.0, n_layers
             layer = np.concatenate([layer, np.full(m, n_layers + k - 1, dtype=np.int16)])
             dep = np.concatenate([dep, np.ones(m, dtype=bool)])
             hanging = np.concatenate([hanging, np.ones(m, dtype=bool)])
-        snaps.append(ToySnapshot(k, target, ids, xy.copy(), radius, layer, dep))
+        snaps.append(Snapshot(k, 0, target, ids, xy.copy(), radius, layer, dep))
     return snaps
