@@ -213,20 +213,28 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, kn, ks, mu, c0, r0, d
     return nbroken
 
 
+
 @njit(cache=True, inline="always")
-def _wall_contact(i, w, ax, ay, ex, ey, l2, pos, vel, radius, wall_vel, wall_shear, kn, ks, mu,
-                  dt, force):
-    """Force of wall ``w`` (segment from (ax, ay) along (ex, ey), squared length l2) on element
-    ``i``, accumulated into ``force``; updates the X_s history ``wall_shear[i, w]``."""
-    px = pos[i, 0] - ax
-    py = pos[i, 1] - ay
+def _segment_offset(px, py, ex, ey, l2):
+    """Vector from the closest point of a segment to a point.
+
+    The segment runs from the origin along (ex, ey) (squared length l2); (px, py) is the point
+    relative to the segment start. The closest point is clamped to the segment, so its ends
+    act as rounded corners. Returns (dx, dy) in metres.
+    """
     s = (px * ex + py * ey) / l2
     if s < 0.0:
         s = 0.0
     elif s > 1.0:
         s = 1.0
-    dx = px - s * ex
-    dy = py - s * ey
+    return px - s * ex, py - s * ey
+
+@njit(cache=True, inline="always")
+def _wall_contact(i, w, ax, ay, ex, ey, l2, pos, vel, radius, wall_vel, wall_shear, kn, ks, mu,
+                  dt, force):
+    """Force of wall ``w`` (segment from (ax, ay) along (ex, ey), squared length l2) on element
+    ``i``, accumulated into ``force``; updates the X_s history ``wall_shear[i, w]``."""
+    dx, dy = _segment_offset(pos[i, 0] - ax, pos[i, 1] - ay, ex, ey, l2)
     d2 = dx * dx + dy * dy
     ri = radius[i]
     if d2 >= ri * ri or d2 == 0.0:
@@ -296,15 +304,7 @@ def build_wall_candidates(pos, radius, walls, skin, cand, n_cand):
         l2 = ex * ex + ey * ey
         m = 0
         for i in range(n):
-            px = pos[i, 0] - ax
-            py = pos[i, 1] - ay
-            s = (px * ex + py * ey) / l2
-            if s < 0.0:
-                s = 0.0
-            elif s > 1.0:
-                s = 1.0
-            dx = px - s * ex
-            dy = py - s * ey
+            dx, dy = _segment_offset(pos[i, 0] - ax, pos[i, 1] - ay, ex, ey, l2)
             cut = radius[i] + skin
             if dx * dx + dy * dy < cut * cut:
                 cand[w, m] = i

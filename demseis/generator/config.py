@@ -24,6 +24,7 @@ Every key is validated: an unknown key, a wrong type or an out-of-range value ra
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -96,6 +97,7 @@ _MATERIAL_FIELDS = {
 }
 
 
+@functools.cache
 def _property_params() -> tuple[ParamDef, ...]:
     """Sweepable (numeric scalar) fields of :class:`demseis.seismic.PropertyModel` (run level).
 
@@ -120,8 +122,9 @@ def _property_params() -> tuple[ParamDef, ...]:
     return tuple(out)
 
 
+@functools.cache
 def all_params() -> dict[str, ParamDef]:
-    """Every scenario parameter accepted in ``[sweep]``, by name."""
+    """Every scenario parameter accepted in ``[sweep]``, by name (shared: do not mutate)."""
     params = {p.name: p for p in _BASE_PARAMS}
     for p in _property_params():
         if p.name in params:

@@ -264,7 +264,7 @@ def run_sweep(
                     _account(summary, bar, shard_task(str(out), cfg_dict, shard))
                 summary.compute_seconds = time.perf_counter() - t_compute
             else:
-                _run_distributed(str(out), cfg_dict, pending, summary, bar, workers, remote, retries)
+                _run_distributed(str(out), cfg, pending, summary, bar, workers, remote, retries)
     finally:
         bar.close()
         if remote is not None and not pending:
@@ -294,7 +294,7 @@ def _connect(scheduler: str) -> Any:
         raise InputError(f"--scheduler {scheduler!r}: cannot connect ({exc})") from None
 
 
-def _run_distributed(store: str, cfg_dict: dict[str, Any], pending: list[int], summary: SweepSummary,
+def _run_distributed(store: str, cfg: Config, pending: list[int], summary: SweepSummary,
                      bar: Any, workers: int | None, remote: Any, retries: int) -> None:
     import dask
     from distributed import Client, LocalCluster, as_completed
@@ -334,7 +334,7 @@ def _run_distributed(store: str, cfg_dict: dict[str, Any], pending: list[int], s
     try:
         t_compute = time.perf_counter()
         # longest runs first (LPT): fewer workers idle at the end of a sweep of unequal runs
-        cfg = parse_config(cfg_dict)
+        cfg_dict = cfg.to_dict()
         order = sorted(pending, key=lambda s: -run_cost(cfg, s))
         futures = [client.submit(shard_task, store, cfg_dict, s, retries=retries, pure=False,
                                  priority=len(order) - rank, key=f"demseis-shard-{s}-{os.getpid()}")

@@ -147,11 +147,7 @@ def fault_mask(strain: np.ndarray, config: LabelConfig | None = None,
     (nz, nx) uint8, 1 = fault.
     """
     cfg = (config or LabelConfig()).validate()
-    s = _smoothed(strain, cfg.smooth_sigma_cells, rock) if smoothed is None else smoothed
-    mask = s >= cfg.fault_threshold
-    if rock is not None:
-        mask &= rock
-    mask = remove_small_components(mask, cfg.min_component_cells)
+    mask = _above(strain, cfg.fault_threshold, cfg, rock, smoothed)
     if cfg.thickness_cells > 0:
         mask = thin_and_dilate(mask, cfg.thickness_cells, cfg.centreline_window_cells,
                                cfg.centreline_window_cells)
@@ -173,14 +169,21 @@ def damage_map(strain: np.ndarray, fault: np.ndarray, config: LabelConfig | None
     smoothed : the strain already smoothed with ``config.smooth_sigma_cells`` (optional).
     """
     cfg = (config or LabelConfig()).validate()
-    s = _smoothed(strain, cfg.smooth_sigma_cells, rock) if smoothed is None else smoothed
-    dz = s >= cfg.damage_threshold
-    if rock is not None:
-        dz &= rock
-    dz = remove_small_components(dz, cfg.min_component_cells)
+    dz = _above(strain, cfg.damage_threshold, cfg, rock, smoothed)
     out = dz.astype(np.uint8)
     out[np.asarray(fault) != 0] = 2
     return out
+
+
+def _above(strain: np.ndarray, threshold: float, cfg: LabelConfig, rock: np.ndarray | None,
+           smoothed: np.ndarray | None) -> np.ndarray:
+    """Cells of the (smoothed) strain at or above ``threshold``, inside the rock, without
+    components smaller than ``cfg.min_component_cells``: the start of both label maps."""
+    s = _smoothed(strain, cfg.smooth_sigma_cells, rock) if smoothed is None else smoothed
+    mask = s >= threshold
+    if rock is not None:
+        mask &= rock
+    return remove_small_components(mask, cfg.min_component_cells)
 
 
 def _smoothed(strain: np.ndarray, sigma: float, rock: np.ndarray | None) -> np.ndarray:
