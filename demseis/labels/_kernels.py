@@ -369,3 +369,137 @@ def guo_hall_thin(mask, lut1, lut2):
             if m > 0:
                 changed = True
     return img[1:-1, 1:-1].copy()
+
+
+@njit(cache=True)
+def _bilinear_rock(f, rock, r, c):
+    """Bilinear value of ``f`` at fractional (row, col) over the rock cells only.
+
+    Weights of cells outside the grid or outside the rock are dropped and the rest
+    renormalised; returns (value, ok) with ok False where no rock cell has weight.
+    """
+    nz, nx = f.shape
+    i0 = int(np.floor(r))
+    j0 = int(np.floor(c))
+    fr = r - i0
+    fc = c - j0
+    acc = 0.0
+    wsum = 0.0
+    for di in range(2):
+        wi = fr if di == 1 else 1.0 - fr
+        i = i0 + di
+        if i < 0 or i >= nz:
+            continue
+        for dj in range(2):
+            wj = fc if dj == 1 else 1.0 - fc
+            j = j0 + dj
+            if j < 0 or j >= nx or not rock[i, j]:
+                continue
+            w = wi * wj
+            if w <= 0.0:
+                continue
+            acc += w * f[i, j]
+            wsum += w
+    if wsum < 1e-9:
+        return 0.0, False
+    return acc / wsum, True
+
+
+@njit(cache=True)
+def ridge_nms(g, n_row, n_col, rock, threshold, out):
+    """Non-maximum suppression of a ridge field across its local normal.
+
+    A cell is a crest cell when it is in the rock, ``g >= threshold`` and ``g`` is not below
+    its bilinear values one cell away on both sides along the unit normal (n_row, n_col).
+
+    Parameters
+    ----------
+    g : (nz, nx) float64 smoothed strain.
+    n_row, n_col : (nz, nx) float64 unit normal of the ridge (row and column components).
+    rock : (nz, nx) bool, cells inside the rock.
+    threshold : float, smallest crest value.
+    out : (nz, nx) uint8, written: 1 = crest.
+    """
+    nz, nx = g.shape
+    for i in range(nz):
+        for j in range(nx):
+            out[i, j] = 0
+            v = g[i, j]
+            if not rock[i, j] or v < threshold:
+                continue
+            a, oka = _bilinear_rock(g, rock, i + n_row[i, j], j + n_col[i, j])
+            b, okb = _bilinear_rock(g, rock, i - n_row[i, j], j - n_col[i, j])
+            if (not oka or v >= a) and (not okb or v >= b):
+                out[i, j] = 1
+
+
+@njit(cache=True)
+def jump_across(u_row, u_col, rock, rows, cols, n_row, n_col, k_min, k_max, out):
+    """Largest displacement jump across each trace point along its normal.
+
+    For k = k_min..k_max cells the displacement (bilinear over rock cells) is sampled at
+    p + k n and p - k n; the jump is u(p + k n) - u(p - k n). The k with the largest |jump|
+    whose two samples both lie in the rock is kept.
+
+    Parameters
+    ----------
+    u_row, u_col : (nz, nx) float64 displacement components (m) along rows (down) and columns.
+    rock : (nz, nx) bool.
+    rows, cols : (m,) int64 trace cells.
+    n_row, n_col : (m,) float64 unit normals of the trace at those cells.
+    k_min, k_max : int, offsets (cells) tried, 1 <= k_min <= k_max.
+    out : (m, 3) float64, written: |jump| (m), jump row and column components (m); NaN where
+        no offset has both samples in the rock.
+    """
+    for q in range(rows.shape[0]):
+        best = -1.0
+        br = np.nan
+        bc = np.nan
+        for k in range(k_min, k_max + 1):
+            ra = rows[q] + k * n_row[q]
+            ca = cols[q] + k * n_col[q]
+            rb = rows[q] - k * n_row[q]
+            cb = cols[q] - k * n_col[q]
+            ua_r, ok1 = _bilinear_rock(u_row, rock, ra, ca)
+            ua_c, ok2 = _bilinear_rock(u_col, rock, ra, ca)
+            ub_r, ok3 = _bilinear_rock(u_row, rock, rb, cb)
+            ub_c, ok4 = _bilinear_rock(u_col, rock, rb, cb)
+            if not (ok1 and ok2 and ok3 and ok4):
+                continue
+            dr = ua_r - ub_r
+            dc = ua_c - ub_c
+            m = np.sqrt(dr * dr + dc * dc)
+            if m > best:
+                best = m
+                br = dr
+                bc = dc
+        out[q, 0] = best if best >= 0.0 else np.nan
+        out[q, 1] = br
+        out[q, 2] = bc
+
+
+@njit(cache=True)
+def sample_profiles(u_row, u_col, rock, rows, cols, n_row, n_col, ts, out):
+    """Displacement profiles along the normals of line cells.
+
+    Parameters
+    ----------
+    u_row, u_col : (nz, nx) float64 displacement components (rows down, columns).
+    rock : (nz, nx) bool.
+    rows, cols : (m,) int64 line cells; n_row, n_col : (m,) float64 unit normals.
+    ts : (k,) float64 offsets along the normal (cells).
+    out : (m, k, 2) float64, written: (u_row, u_col) at p + t n (bilinear over rock cells);
+        NaN where no rock cell is in reach.
+    """
+    for q in range(rows.shape[0]):
+        for a in range(ts.shape[0]):
+            r = rows[q] + ts[a] * n_row[q]
+            c = cols[q] + ts[a] * n_col[q]
+            vr, ok1 = _bilinear_rock(u_row, rock, r, c)
+            vc, ok2 = _bilinear_rock(u_col, rock, r, c)
+            if ok1 and ok2:
+                out[q, a, 0] = vr
+                out[q, a, 1] = vc
+            else:
+                out[q, a, 0] = np.nan
+                out[q, a, 1] = np.nan

@@ -11,6 +11,7 @@ from demseis.errors import ConfigError
 
 STRAIN_MEASURES = ("total", "cumulative")
 NEIGHBOUR_METHODS = ("radius", "knn")
+FAULT_METHODS = ("slip_trace", "strain_band")
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,27 @@ class LabelConfig:
         moving-averaged over this many cells along their length (removes the element-scale
         stepping of the band edges; ~4 element diameters at 10 m cells) and side branches
         (end point to junction) up to this length are pruned, in [1, 201]; 1 = raw skeleton.
+        Used by both fault methods.
+    method : ``"slip_trace"`` (default: crest of localised shear kept where the displacement
+        jumps across it, with instance ids, slip, dip and sense; :mod:`demseis.labels.traces`)
+        or ``"strain_band"`` (the thresholded strain band's centre line, the labels of
+        demseis <= 0.1; ``fault_threshold`` and ``damage_threshold`` apply only to it).
+    min_slip_m : slip_trace: smallest displacement jump (m) across a crest cell for it to be
+        fault, in (0, 1e4]; None (default) = one grid cell.
+    ridge_threshold : slip_trace: smallest shear strain of a crest cell (engineering shear
+        strain of the smoothed element displacement on the grid), in (0, 100].
+    ridge_sigma_cells : slip_trace: Gaussian sigma (cells) of the displacement smoothing
+        before its shear strain is taken, in [0, 20].
+    slip_offset_cells : slip_trace: the jump is the largest of u(+k) - u(-k) along the normal
+        for k = 2..this (cells), in [2, 20].
+    min_trace_cells : slip_trace: crest / trace pieces with fewer cells are dropped, in [1, 1e6].
+    link_angle_deg : slip_trace: branches meeting at a junction are one fault when their
+        directions are within this angle of a straight line, in [0, 90].
+    link_gap_cells : slip_trace: gaps of up to about this many cells between crest pieces are
+        bridged (morphological closing with a disk of this diameter), in [0, 50].
+    damage_width_ratio : slip_trace: damage-zone total width as a multiple of the local slip,
+        in [0, 100] (see docs/labels.md for the published data behind the default).
+    damage_max_width_m : slip_trace: upper bound of the damage-zone total width (m), in [0, 1e5].
     """
 
     strain_measure: str = "cumulative"
@@ -61,6 +83,16 @@ class LabelConfig:
     smooth_sigma_cells: float = 1.0
     thickness_cells: float = 1.0
     centreline_window_cells: int = 15
+    method: str = "slip_trace"
+    min_slip_m: float | None = None
+    ridge_threshold: float = 0.05
+    ridge_sigma_cells: float = 2.0
+    slip_offset_cells: int = 4
+    min_trace_cells: int = 8
+    link_angle_deg: float = 35.0
+    link_gap_cells: int = 4
+    damage_width_ratio: float = 1.0
+    damage_max_width_m: float = 200.0
 
     def validate(self) -> "LabelConfig":
         """Check every field; returns ``self`` so it chains.
@@ -87,7 +119,22 @@ class LabelConfig:
         _number("smooth_sigma_cells", self.smooth_sigma_cells, 0.0, 20.0)
         _number("thickness_cells", self.thickness_cells, 0.0, 50.0)
         _integer("centreline_window_cells", self.centreline_window_cells, 1, 201)
+        _choice("method", self.method, FAULT_METHODS)
+        if self.min_slip_m is not None:
+            _number("min_slip_m", self.min_slip_m, 0.0, 1e4, lo_open=True)
+        _number("ridge_threshold", self.ridge_threshold, 0.0, 100.0, lo_open=True)
+        _number("ridge_sigma_cells", self.ridge_sigma_cells, 0.0, 20.0)
+        _integer("slip_offset_cells", self.slip_offset_cells, 2, 20)
+        _integer("min_trace_cells", self.min_trace_cells, 1, 1_000_000)
+        _number("link_angle_deg", self.link_angle_deg, 0.0, 90.0)
+        _integer("link_gap_cells", self.link_gap_cells, 0, 50)
+        _number("damage_width_ratio", self.damage_width_ratio, 0.0, 100.0)
+        _number("damage_max_width_m", self.damage_max_width_m, 0.0, 1e5)
         return self
+
+    def min_slip_for(self, cell_m: float) -> float:
+        """``min_slip_m``, or one grid cell (``cell_m``) when it is not set."""
+        return float(cell_m) if self.min_slip_m is None else float(self.min_slip_m)
 
     @classmethod
     def from_mapping(cls, table: dict[str, Any]) -> "LabelConfig":

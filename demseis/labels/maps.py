@@ -32,7 +32,8 @@ ROCK_REACH = 1.5
 _EIGHT = np.ones((3, 3), dtype=bool)
 
 
-def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = None) -> dict:
+def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = None,
+               displacement: np.ndarray | None = None) -> dict:
     """Fault, damage-zone, strain and layer labels of one snapshot on ``grid``.
 
     Parameters
@@ -43,13 +44,22 @@ def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = 
         ``config.strain_measure`` picks total or cumulative.
     grid : :class:`demseis.seismic.grid.Grid`, row 0 at the top.
     config : :class:`LabelConfig` (defaults if None).
+    displacement : (n, 2) displacement (m) of each element since its first appearance, or the
+        tuple (displacement, birth) of :func:`demseis.labels.traces.displacement_history`
+        (birth: snapshot of first appearance, so that deposition surfaces are not taken for
+        slip); required by the default ``"slip_trace"`` method.
 
     Returns
     -------
     dict with (nz, nx) arrays:
         ``fault`` uint8 0/1; ``damage`` uint8 0 background / 1 damage zone / 2 fault core;
         ``strain`` float32 rasterised gamma_max (unsmoothed; 0 outside the rock);
-        ``layer`` int16 layer id of the cell's element (-1 outside the rock).
+        ``layer`` int16 layer id of the cell's element (-1 outside the rock);
+        ``fault_id`` int16 fault instance 1.. on fault cells (0 elsewhere);
+        ``slip_m`` float32 slip (m), ``dip_deg`` float32 dip (degrees) and ``sense`` uint8
+        (1 normal, 2 reverse) of the nearest trace cell, on fault cells (0 elsewhere); with
+        ``"strain_band"`` fault_id numbers the mask's 8-connected components and slip, dip,
+        sense are 0.
     """
     cfg = (config or LabelConfig()).validate()
     xy = np.asarray(snapshot.xy, dtype=np.float64)
@@ -75,11 +85,89 @@ def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = 
     rock = owner >= 0
     layer_map = np.full(grid.shape, -1, dtype=np.int16)
     layer_map[rock] = layer[owner[rock]].astype(np.int16)
-    smoothed = _smoothed(strain, cfg.smooth_sigma_cells, rock)
-    fault = fault_mask(strain, cfg, rock=rock, smoothed=smoothed)
-    damage = damage_map(strain, fault, cfg, rock=rock, smoothed=smoothed)
-    return {"fault": fault, "damage": damage, "strain": strain.astype(np.float32),
-            "layer": layer_map}
+    if cfg.method == "slip_trace":
+        if displacement is None:
+            raise InputError("label_maps: the 'slip_trace' method needs the elements' "
+                             "displacement (n, 2); see demseis.labels.traces.displacement_history")
+        birth = None
+        if isinstance(displacement, tuple):
+            displacement, birth = displacement
+        disp = np.asarray(displacement, dtype=np.float64)
+        if disp.shape != (n, 2):
+            raise InputError(f"displacement has shape {disp.shape}; expected ({n}, 2)")
+        from demseis.labels.traces import slip_traces
+
+        ux, _ = rasterise_strain(xy, radius, disp[:, 0], grid)
+        uy, _ = rasterise_strain(xy, radius, disp[:, 1], grid)
+        cohort = None
+        if birth is not None:
+            birth = np.asarray(birth)
+            if birth.shape != (n,):
+                raise InputError(f"birth has shape {birth.shape}; expected ({n},)")
+            cohort = np.where(rock, birth[np.maximum(owner, 0)], -1)
+        tr = slip_traces(strain, ux, uy, rock, float(grid.cell_m), cfg, cohort)
+        out = trace_targets(tr, cfg, float(grid.cell_m), rock)
+    else:
+        smoothed = _smoothed(strain, cfg.smooth_sigma_cells, rock)
+        fault = fault_mask(strain, cfg, rock=rock, smoothed=smoothed)
+        damage = damage_map(strain, fault, cfg, rock=rock, smoothed=smoothed)
+        fid, _ = ndimage.label(fault, structure=_EIGHT)
+        zeros = np.zeros(grid.shape, dtype=np.float32)
+        out = {"fault": fault, "damage": damage, "fault_id": fid.astype(np.int16),
+               "slip_m": zeros, "dip_deg": zeros.copy(),
+               "sense": np.zeros(grid.shape, dtype=np.uint8)}
+    return {"fault": out["fault"], "damage": out["damage"], "strain": strain.astype(np.float32),
+            "layer": layer_map, "fault_id": out["fault_id"], "slip_m": out["slip_m"],
+            "dip_deg": out["dip_deg"], "sense": out["sense"]}
+
+
+def trace_targets(traces, config: LabelConfig, cell_m: float,
+                  rock: np.ndarray | None = None) -> dict:
+    """Per-pixel targets of :class:`demseis.labels.traces.Traces`.
+
+    The fault mask is the cells whose centre lies within ``thickness_cells / 2`` of a trace
+    cell (the trace itself for t <= 1; t = 0 is treated as 1); ``fault_id``, ``slip_m``,
+    ``dip_deg`` and ``sense`` are those of the nearest trace cell, on mask cells. The damage
+    zone (class 1) is the cells within half the local damage width of the trace, the width
+    being ``min(damage_width_ratio * slip, damage_max_width_m)`` of the nearest trace cell;
+    class 2 is the fault mask.
+    """
+    trace = np.asarray(traces.trace, dtype=bool)
+    shape = trace.shape
+    if not trace.any():
+        z8 = np.zeros(shape, dtype=np.uint8)
+        zf = np.zeros(shape, dtype=np.float32)
+        return {"fault": z8, "damage": z8.copy(), "fault_id": np.zeros(shape, np.int16),
+                "slip_m": zf, "dip_deg": zf.copy(), "sense": z8.copy()}
+    dist, idx = ndimage.distance_transform_edt(~trace, return_indices=True)
+    near_r, near_c = idx[0], idx[1]
+    fault = dist <= max(0.5 * float(config.thickness_cells), 0.5)
+    slip_near = traces.slip_m[near_r, near_c].astype(np.float64)
+    width_m = np.minimum(config.damage_width_ratio * slip_near, config.damage_max_width_m)
+    damage = dist <= 0.5 * width_m / float(cell_m)
+    if rock is not None:
+        fault &= rock
+        damage &= rock
+    dmg = damage.astype(np.uint8)
+    dmg[fault] = 2
+
+    def on_fault(a: np.ndarray, dtype) -> np.ndarray:
+        return np.where(fault, a[near_r, near_c], 0).astype(dtype)
+
+    return {"fault": fault.astype(np.uint8), "damage": dmg,
+            "fault_id": on_fault(traces.instance, np.int16),
+            "slip_m": on_fault(traces.slip_m, np.float32),
+            "dip_deg": on_fault(traces.dip_deg, np.float32),
+            "sense": on_fault(traces.sense, np.uint8)}
+
+
+def sample_facts(maps: dict) -> dict:
+    """Per-sample facts of a label dict: ``has_fault`` (0/1), ``n_faults``, ``max_slip_m``."""
+    fid = np.asarray(maps["fault_id"])
+    ids = np.unique(fid[fid > 0])
+    slip = np.asarray(maps["slip_m"])
+    return {"has_fault": int(np.asarray(maps["fault"]).any()), "n_faults": int(ids.size),
+            "max_slip_m": float(slip.max()) if slip.size else 0.0}
 
 
 def rasterise_strain(xy: np.ndarray, radius: np.ndarray, values: np.ndarray,

@@ -1,0 +1,469 @@
+"""Slip surfaces as traced objects: crest of localised shear, linked into faults, kept where they slip.
+
+A fault label should mark where the section shows an offset. The continuum strain of the
+element displacements (:mod:`demseis.labels.strain`) is high in a band around every slip
+surface, but also where the rock only bends (a monocline above a blind tip) and in the broad
+wedge of a large-throw fault. Thresholding and thinning that band (the ``"strain_band"``
+method of :mod:`demseis.labels.maps`) turns such blobs into networks with loops and horizontal
+"rungs". Here instead (the ``"slip_trace"`` method):
+
+1. **Crest.** The rasterised strain is smoothed (``ridge_sigma_cells``) and its Hessian gives the
+   local band normal (eigenvector of the most negative curvature). Non-maximum suppression
+   keeps the cells that are not below their neighbours one cell away on both sides along that
+   normal (a ridge, Canny-style) where the strain is at least ``ridge_threshold``; the crest is
+   thinned to one cell (Guo-Hall), components shorter than ``min_trace_cells`` dropped, short
+   spurs pruned and every branch moving-averaged along its length (``centreline_window_cells``),
+   as for the strain-band centre line.
+2. **Slip.** At every crest cell the trace's local direction is fitted over a 9 x 9 window, and
+   the element displacement (rasterised like the strain) is sampled ``k`` cells away on both
+   sides along the normal, k = 2..``slip_offset_cells``; the largest |u(+k) - u(-k)| is the
+   displacement jump (slip, m), averaged along the trace over 5 x 5 cells. A crest cell is fault
+   only where that slip is at least ``min_slip_m``.
+3. **Faults.** The kept cells are linked into traces: the skeleton is cut at its junctions, and
+   at each junction the two branches that continue each other (directions within
+   ``link_angle_deg`` of a straight line) are joined; the others (splays, antithetics, the
+   second of two crossing faults) start their own fault. Instance ids are 1.. by size.
+4. **Attributes.** Dip (degrees from horizontal, from the fitted direction), sense of slip (1
+   normal: the upper block moved down the fault relative to the lower; 2 reverse), slip.
+
+All of it is on the grid of the seismic (row 0 at the top, square cells).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from demseis.errors import InputError
+from demseis.labels import _kernels
+from demseis.labels.centreline import crossing_number, prune_spurs, smooth_skeleton
+from demseis.labels.config import LabelConfig
+from demseis.labels.maps import remove_small_components, skeletonize
+
+_EIGHT = np.ones((3, 3), dtype=bool)
+
+#: sense-of-slip codes of the ``sense`` target
+SENSE_NONE, SENSE_NORMAL, SENSE_REVERSE = 0, 1, 2
+
+#: window (cells) over which a trace's local direction is fitted (also the rung definition)
+DIRECTION_WINDOW = 9
+
+
+@dataclass(frozen=True)
+class Traces:
+    """Fault traces of one section (all (nz, nx), one-cell-wide lines).
+
+    Attributes
+    ----------
+    trace : bool, labelled trace cells (slip >= min_slip_m).
+    instance : int32, fault id 1..n on trace cells, 0 elsewhere.
+    slip_m : float32, displacement jump across the trace (m), 0 off the trace.
+    dip_deg : float32, dip of the trace (degrees from horizontal, 0..90), 0 off the trace.
+    sense : uint8, 1 normal / 2 reverse on trace cells, 0 elsewhere.
+    crest : bool, every crest cell before the slip test (for diagnostics).
+    crest_slip_m : float32, slip measured on every crest cell (NaN where not measurable).
+    """
+
+    trace: np.ndarray
+    instance: np.ndarray
+    slip_m: np.ndarray
+    dip_deg: np.ndarray
+    sense: np.ndarray
+    crest: np.ndarray
+    crest_slip_m: np.ndarray
+
+    @property
+    def n_faults(self) -> int:
+        """Number of fault instances."""
+        return int(self.instance.max()) if self.instance.size else 0
+
+
+def displacement_history(snapshots) -> list[np.ndarray]:
+    """Displacement (m, x right, y up) of every element since its first appearance.
+
+    Parameters
+    ----------
+    snapshots : sequence of :class:`demseis.dem.types.Snapshot` in time order, one id space.
+
+    Returns
+    -------
+    list of (displacement (n_k, 2) float64, birth (n_k,) int64) aligned with each snapshot's
+    elements; an element's reference position is where it first appears (``birth``: the
+    position in ``snapshots`` of that snapshot; 0 for the original pack).
+    """
+    first_ids = np.empty(0, dtype=np.int64)
+    first_xy = np.empty((0, 2), dtype=np.float64)
+    first_k = np.empty(0, dtype=np.int64)
+    out = []
+    for k, s in enumerate(snapshots):
+        ids = np.asarray(s.ids, dtype=np.int64)
+        xy = np.asarray(s.xy, dtype=np.float64)
+        pos = np.searchsorted(first_ids, ids)
+        known = pos < first_ids.shape[0]
+        known[known] = first_ids[pos[known]] == ids[known]
+        ref = xy.copy()
+        ref[known] = first_xy[pos[known]]
+        birth = np.full(ids.shape[0], k, dtype=np.int64)
+        birth[known] = first_k[pos[known]]
+        out.append((xy - ref, birth))
+        if (~known).any():
+            all_ids = np.concatenate([first_ids, ids[~known]])
+            all_xy = np.concatenate([first_xy, xy[~known]])
+            all_k = np.concatenate([first_k, birth[~known]])
+            order = np.argsort(all_ids, kind="stable")
+            first_ids, first_xy, first_k = all_ids[order], all_xy[order], all_k[order]
+    return out
+
+
+def ridge_normals(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normal (row, col) of the ridges of ``g``: eigenvector of the Hessian's least eigenvalue."""
+    g_r, g_c = np.gradient(g)
+    h_rr, h_rc = np.gradient(g_r)
+    h_cr, h_cc = np.gradient(g_c)
+    h_x = 0.5 * (h_rc + h_cr)
+    # eigenvector of the largest eigenvalue at angle phi (from the row axis); least at phi + 90
+    phi = 0.5 * np.arctan2(2.0 * h_x, h_rr - h_cc) + 0.5 * np.pi
+    return np.cos(phi), np.sin(phi)
+
+
+def shear_field(disp_x_m: np.ndarray, disp_y_m: np.ndarray, rock: np.ndarray, cell_m: float,
+                sigma_cells: float, cohort: np.ndarray | None = None) -> np.ndarray:
+    """Engineering shear strain of the smoothed grid displacement, per deposition cohort.
+
+    gamma = sqrt((du_x/dx - du_y/dy)^2 + (du_x/dy + du_y/dx)^2) (1 for simple shear of 1, a
+    Gaussian profile of area = slip across a displacement step; rigid motion gives 0). The
+    displacement is smoothed by a Gaussian of ``sigma_cells`` normalised over the cells of
+    one cohort (elements of one first appearance): displacements are measured from each
+    element's first appearance, so they jump at a deposition surface without any strain
+    there, and that jump must not be differentiated.
+
+    Parameters
+    ----------
+    disp_x_m, disp_y_m : (nz, nx) rasterised element displacement (m, x right, y up).
+    rock : (nz, nx) bool. cell_m : cell size (m). sigma_cells : smoothing (cells).
+    cohort : (nz, nx) int cohort of each rock cell (default: one cohort).
+
+    Returns
+    -------
+    (nz, nx) float64, 0 outside the rock.
+    """
+    rock = np.asarray(rock, dtype=bool)
+    coh = np.zeros(rock.shape, dtype=np.int64) if cohort is None else np.asarray(cohort)
+    out = np.zeros(rock.shape)
+    for c in np.unique(coh[rock]):
+        m = rock & (coh == c)
+        w = m.astype(np.float64)
+        den = ndimage.gaussian_filter(w, sigma_cells, mode="nearest") if sigma_cells > 0 else w
+        grads = []
+        for u in (disp_x_m, disp_y_m):
+            uu = np.where(m, u, 0.0)
+            num = ndimage.gaussian_filter(uu, sigma_cells, mode="nearest") if sigma_cells > 0 \
+                else uu
+            with np.errstate(invalid="ignore", divide="ignore"):
+                sm = np.where(den > 1e-3, num / np.maximum(den, 1e-12), np.nan)
+            # fill outside the cohort from the nearest cohort cell so differences stay inside
+            bad = ~np.isfinite(sm)
+            if bad.all():
+                sm = np.zeros_like(sm)
+            elif bad.any():
+                idx = ndimage.distance_transform_edt(bad, return_distances=False,
+                                                     return_indices=True)
+                sm = sm[idx[0], idx[1]]
+            d_row, d_col = np.gradient(sm)
+            grads.append((d_col / cell_m, -d_row / cell_m))  # d/dx, d/dy (y up)
+        (uxx, uxy), (uyx, uyy) = grads
+        g = np.sqrt((uxx - uyy) ** 2 + (uxy + uyx) ** 2)
+        out[m] = g[m]
+    return out
+
+
+def crest_cells(field: np.ndarray, rock: np.ndarray, config: LabelConfig) -> np.ndarray:
+    """One-cell-wide crest lines of a (smooth) shear field (step 1 of the module docstring)."""
+    g = np.asarray(field, dtype=np.float64)
+    n_r, n_c = ridge_normals(g)
+    out = np.zeros(g.shape, dtype=np.uint8)
+    _kernels.ridge_nms(np.ascontiguousarray(g), np.ascontiguousarray(n_r),
+                       np.ascontiguousarray(n_c), np.ascontiguousarray(rock),
+                       float(config.ridge_threshold), out)
+    crest = out.astype(bool)
+    gap = int(config.link_gap_cells)
+    if gap > 0:  # bridge gaps of up to ~gap cells between pieces of one crest
+        disk = _disk(gap / 2.0)
+        pad = gap + 1
+        crest = ndimage.binary_closing(np.pad(crest, pad), structure=disk)[pad:-pad, pad:-pad]
+    skel = skeletonize(crest & rock)
+    skel = remove_small_components(skel, config.min_trace_cells)
+    w = int(config.centreline_window_cells)
+    if w > 1 and skel.any():
+        skel = prune_spurs(skel, w)
+    return skel
+
+
+def _disk(radius: float) -> np.ndarray:
+    k = int(np.ceil(radius))
+    yy, xx = np.mgrid[-k:k + 1, -k:k + 1]
+    return xx * xx + yy * yy <= radius * radius + 1e-9
+
+
+def centre_on_jump(skel: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
+                   rock: np.ndarray, reach_cells: int) -> np.ndarray:
+    """Sub-cell offset (rows, cols) from each line cell to the centre of the displacement jump.
+
+    Along the line's normal the displacement is sampled at t = -reach..reach cells (half-cell
+    steps) and projected on the jump u(+reach) - u(-reach); the offset is the centroid of its
+    increase along t (where the displacement changes: the slip surface, or the middle of a
+    shear band). NaN where the jump is not measurable.
+    """
+    rows, cols = np.nonzero(skel)
+    t_r, t_c = local_direction(skel)
+    n_r, n_c = t_c[rows, cols], -t_r[rows, cols]
+    ts = np.arange(-2 * reach_cells, 2 * reach_cells + 1) / 2.0
+    u_row = np.ascontiguousarray(-np.asarray(disp_y_m, dtype=np.float64))
+    u_col = np.ascontiguousarray(np.asarray(disp_x_m, dtype=np.float64))
+    prof = np.empty((rows.size, ts.size, 2))
+    _kernels.sample_profiles(u_row, u_col, np.ascontiguousarray(rock), rows.astype(np.int64),
+                             cols.astype(np.int64), n_r.copy(), n_c.copy(), ts, prof)
+    jump = prof[:, -1] - prof[:, 0]
+    mag = np.hypot(jump[:, 0], jump[:, 1])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        f = (prof[..., 0] * jump[:, None, 0] + prof[..., 1] * jump[:, None, 1]) / mag[:, None]
+        df = np.clip(np.diff(f, axis=1), 0.0, None)
+        tm = 0.5 * (ts[1:] + ts[:-1])
+        off = (df * tm).sum(1) / df.sum(1)
+    out = np.full((*skel.shape, 2), np.nan)
+    ok = np.isfinite(off) & (mag > 0)
+    out[rows[ok], cols[ok], 0] = off[ok] * n_r[ok]
+    out[rows[ok], cols[ok], 1] = off[ok] * n_c[ok]
+    return out
+
+
+def local_direction(skel: np.ndarray, window: int = DIRECTION_WINDOW) -> tuple[np.ndarray, np.ndarray]:
+    """Unit tangent (row, col) of a line mask, fitted over a ``window`` x ``window`` box.
+
+    Principal axis of the coordinates of the mask cells in the box centred on each cell (the
+    box sums are box filters of the cell moments). Values off the mask are meaningless.
+    """
+    s = np.asarray(skel, dtype=np.float64)
+    rr, cc = np.mgrid[0:s.shape[0], 0:s.shape[1]].astype(np.float64)
+
+    def box(a: np.ndarray) -> np.ndarray:
+        return ndimage.uniform_filter(a, size=window, mode="constant") * window * window
+
+    n = np.maximum(box(s), 1e-12)
+    mr, mc = box(s * rr) / n, box(s * cc) / n
+    crr = box(s * rr * rr) / n - mr * mr
+    ccc = box(s * cc * cc) / n - mc * mc
+    crc = box(s * rr * cc) / n - mr * mc
+    phi = 0.5 * np.arctan2(2.0 * crc, crr - ccc)  # angle of the major axis from the row axis
+    return np.cos(phi), np.sin(phi)
+
+
+def dip_of(t_row: np.ndarray, t_col: np.ndarray) -> np.ndarray:
+    """Dip (degrees from horizontal, 0..90) of a tangent (row, col) on square cells."""
+    return np.degrees(np.arctan2(np.abs(t_row), np.abs(t_col)))
+
+
+def rung_fraction(skel: np.ndarray, window: int = DIRECTION_WINDOW, max_deg: float = 12.0) -> float:
+    """Share of skeleton cells whose direction fitted over ``window`` x ``window`` is within
+    ``max_deg`` of horizontal (the "rungs" of issue 13). NaN for an empty skeleton."""
+    s = np.asarray(skel, dtype=bool)
+    if not s.any():
+        return float("nan")
+    t_r, t_c = local_direction(s, window)
+    return float((dip_of(t_r, t_c)[s] <= max_deg).mean())
+
+
+def loop_count(skel: np.ndarray) -> int:
+    """Number of closed loops of a line mask: background regions it encloses (4-connected)."""
+    s = np.asarray(skel, dtype=bool)
+    holes = ndimage.binary_fill_holes(s) & ~s
+    return int(ndimage.label(holes)[1])
+
+
+def trace_instances(skel: np.ndarray, link_angle_deg: float = 35.0) -> np.ndarray:
+    """Fault ids of a one-cell-wide trace network (0 off the trace, 1.. by size).
+
+    Branches are the 8-connected pieces left when the junction cells (crossing number >= 3)
+    and their neighbours are removed. At each junction, pairs of branches that continue each
+    other (their directions away from the junction within ``link_angle_deg`` of opposite) are
+    joined, the straightest pair first; every other branch is a fault of its own. Junction
+    cells take the id of the nearest branch cell.
+    """
+    s = np.asarray(skel, dtype=bool)
+    out = np.zeros(s.shape, dtype=np.int32)
+    if not s.any():
+        return out
+    junction = (crossing_number(s) >= 3) & s
+    zone = ndimage.binary_dilation(junction, structure=_EIGHT) & s
+    body = s & ~zone
+    blab, nb = ndimage.label(body, structure=_EIGHT)
+    if nb == 0:
+        lab, _ = ndimage.label(s, structure=_EIGHT)
+        return _by_size(lab)
+    parent = np.arange(nb + 1)
+
+    def find(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    cos_max = -np.cos(np.radians(link_angle_deg))
+    zlab, nz_ = ndimage.label(zone, structure=_EIGHT)
+    br_r, br_c = np.nonzero(blab)
+    br_l = blab[br_r, br_c]
+    reach = 8.0
+    for z, sl in enumerate(ndimage.find_objects(zlab), start=1):
+        if sl is None:
+            continue
+        zr, zc = np.nonzero(zlab[sl] == z)
+        cr, cc = zr.mean() + sl[0].start, zc.mean() + sl[1].start
+        r0, r1 = max(sl[0].start - 1, 0), min(sl[0].stop + 1, s.shape[0])
+        c0, c1 = max(sl[1].start - 1, 0), min(sl[1].stop + 1, s.shape[1])
+        near = (zlab[r0:r1, c0:c1] == z)
+        ring = ndimage.binary_dilation(np.pad(near, 1), structure=_EIGHT)[1:-1, 1:-1]
+        adj = np.unique(blab[r0:r1, c0:c1][ring & (blab[r0:r1, c0:c1] > 0)])
+        if adj.size < 2:
+            continue
+        dirs = {}
+        for b in adj:
+            sel = (br_l == b) & ((br_r - cr) ** 2 + (br_c - cc) ** 2 <= reach * reach)
+            if not sel.any():
+                continue
+            d = np.array([br_r[sel].mean() - cr, br_c[sel].mean() - cc])
+            nrm = np.hypot(*d)
+            if nrm > 0:
+                dirs[int(b)] = d / nrm
+        keys = sorted(dirs)
+        pairs = sorted((float(dirs[a] @ dirs[b]), a, b)
+                       for i, a in enumerate(keys) for b in keys[i + 1:])
+        used: set[int] = set()
+        for cos_ab, a, b in pairs:
+            if cos_ab > cos_max:
+                break
+            if a in used or b in used:
+                continue
+            used.update((a, b))
+            parent[find(a)] = find(b)
+    roots = np.array([find(i) for i in range(nb + 1)])
+    lab = roots[blab]
+    lab[~body] = 0
+    # junction cells: id of the nearest branch cell
+    idx = ndimage.distance_transform_edt(lab == 0, return_distances=False, return_indices=True)
+    fill = lab[idx[0], idx[1]]
+    lab = np.where(zone, fill, lab)
+    lab[~s] = 0
+    return _by_size(lab)
+
+
+def _by_size(lab: np.ndarray) -> np.ndarray:
+    """Renumber positive labels 1.. by decreasing size (ties: lower old label first)."""
+    ids, counts = np.unique(lab[lab > 0], return_counts=True)
+    order = ids[np.lexsort((ids, -counts))]
+    lut = np.zeros(int(lab.max()) + 1, dtype=np.int32)
+    lut[order] = np.arange(1, order.size + 1, dtype=np.int32)
+    return lut[lab]
+
+
+def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
+                rock: np.ndarray, cell_m: float, config: LabelConfig | None = None,
+                cohort: np.ndarray | None = None) -> Traces:
+    """Fault traces of one section from its rasterised strain and displacement.
+
+    Parameters
+    ----------
+    strain : (nz, nx) gamma_max on the grid (0 outside the rock).
+    disp_x_m, disp_y_m : (nz, nx) element displacement since first appearance (m, x right,
+        y up), rasterised like the strain.
+    rock : (nz, nx) bool, cells inside the rock.
+    cell_m : grid cell size (m); ``min_slip_m`` defaults to one cell.
+    config : :class:`LabelConfig` (defaults if None).
+    cohort : (nz, nx) int, first-appearance snapshot of each cell's element (None: one cohort).
+
+    Returns
+    -------
+    :class:`Traces`.
+    """
+    cfg = (config or LabelConfig()).validate()
+    strain = np.asarray(strain, dtype=np.float64)
+    rock = np.asarray(rock, dtype=bool)
+    shape = strain.shape
+    for name, a in (("disp_x_m", disp_x_m), ("disp_y_m", disp_y_m), ("rock", rock)):
+        if np.shape(a) != shape:
+            raise InputError(f"{name} has shape {np.shape(a)}; expected {shape} like strain")
+    min_slip = cfg.min_slip_for(cell_m)
+    # voids inside the assembly (an opened gap along a fault) are rock for the tracing
+    rock = ndimage.binary_fill_holes(rock)
+    if cohort is not None:
+        cohort = np.asarray(cohort)
+        idx = ndimage.distance_transform_edt(cohort < 0, return_distances=False,
+                                             return_indices=True)
+        cohort = np.where(rock, cohort[idx[0], idx[1]], -1)
+    field = shear_field(disp_x_m, disp_y_m, rock, cell_m, cfg.ridge_sigma_cells, cohort)
+    crest = crest_cells(field, rock, cfg)
+    if crest.any():
+        shift = centre_on_jump(crest, disp_x_m, disp_y_m, rock, cfg.slip_offset_cells)
+        crest = skeletonize(smooth_skeleton(crest, int(cfg.centreline_window_cells), shift)) & rock
+    crest_slip = np.full(shape, np.nan, dtype=np.float32)
+    empty = Traces(trace=np.zeros(shape, bool), instance=np.zeros(shape, np.int32),
+                   slip_m=np.zeros(shape, np.float32), dip_deg=np.zeros(shape, np.float32),
+                   sense=np.zeros(shape, np.uint8), crest=crest, crest_slip_m=crest_slip)
+    if not crest.any():
+        return empty
+    t_r, t_c = local_direction(crest)
+    jump = _jump(crest, t_r, t_c, disp_x_m, disp_y_m, rock, cfg.slip_offset_cells)
+    slip = _along_trace_mean(crest, np.nan_to_num(jump[..., 0], nan=0.0),
+                             np.isfinite(jump[..., 0]))
+    crest_slip[crest] = slip[crest]
+    trace = crest & (slip >= min_slip)
+    trace = remove_small_components(trace, cfg.min_trace_cells)
+    if not trace.any():
+        return empty
+    inst = trace_instances(trace, cfg.link_angle_deg)
+    t_r, t_c = local_direction(trace)
+    dip = dip_of(t_r, t_c)
+    # sense: jump (upper side minus lower side) against the down-dip direction
+    jump = _jump(trace, t_r, t_c, disp_x_m, disp_y_m, rock, cfg.slip_offset_cells)
+    down_r, down_c = np.abs(t_r), np.where(t_r >= 0, t_c, -t_c)
+    along = jump[..., 1] * down_r + jump[..., 2] * down_c
+    sense = np.where(along >= 0, SENSE_NORMAL, SENSE_REVERSE).astype(np.uint8)
+    z = ~trace
+    slip_out = np.where(trace, slip, 0.0).astype(np.float32)
+    dip_out = np.where(z, 0.0, dip).astype(np.float32)
+    sense[z] = SENSE_NONE
+    return Traces(trace=trace, instance=inst, slip_m=slip_out, dip_deg=dip_out, sense=sense,
+                  crest=crest, crest_slip_m=crest_slip)
+
+
+def _jump(cells: np.ndarray, t_r: np.ndarray, t_c: np.ndarray, disp_x_m: np.ndarray,
+          disp_y_m: np.ndarray, rock: np.ndarray, k_max: int) -> np.ndarray:
+    """(nz, nx, 3) |jump|, jump row / col components at ``cells`` (NaN elsewhere).
+
+    The normal points to the upper side (row decreasing; column increasing for a vertical
+    trace), so the jump is u(upper side) - u(lower side).
+    """
+    rows, cols = np.nonzero(cells)
+    n_r, n_c = t_c[rows, cols].copy(), -t_r[rows, cols].copy()
+    flip = (n_r > 0) | ((n_r == 0) & (n_c < 0))
+    n_r[flip] *= -1.0
+    n_c[flip] *= -1.0
+    u_row = np.ascontiguousarray(-np.asarray(disp_y_m, dtype=np.float64))
+    u_col = np.ascontiguousarray(np.asarray(disp_x_m, dtype=np.float64))
+    res = np.empty((rows.size, 3))
+    _kernels.jump_across(u_row, u_col, np.ascontiguousarray(rock), rows.astype(np.int64),
+                         cols.astype(np.int64), n_r, n_c, 2, max(int(k_max), 2), res)
+    out = np.full((*cells.shape, 3), np.nan)
+    out[rows, cols] = res
+    return out
+
+
+def _along_trace_mean(cells: np.ndarray, values: np.ndarray, ok: np.ndarray,
+                      size: int = 5) -> np.ndarray:
+    """Mean of ``values`` over the ``ok`` cells of ``cells`` in a size x size box (NaN if none)."""
+    w = (cells & ok).astype(np.float64)
+    num = ndimage.uniform_filter(values * w, size=size, mode="constant")
+    den = ndimage.uniform_filter(w, size=size, mode="constant")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(den > 1e-9, num / np.maximum(den, 1e-12), np.nan)
