@@ -53,6 +53,10 @@ SAMPLE_ARRAYS: dict[str, np.dtype] = {
     "strain": np.dtype("float32"),
     "layer": np.dtype("int16"),
     "impedance": np.dtype("float32"),
+    "fault_id": np.dtype("int16"),
+    "slip_m": np.dtype("float32"),
+    "dip_deg": np.dtype("float32"),
+    "sense": np.dtype("uint8"),
 }
 """Known per-sample arrays and their fixed dtypes."""
 
@@ -63,6 +67,8 @@ LABEL_RANGES: dict[str, tuple[int, int | None]] = {
     "fault": (0, 1),
     "damage": (0, 2),
     "layer": (-1, None),  # -1: no rock (above the free surface), see demseis.labels
+    "fault_id": (0, None),
+    "sense": (0, 2),
 }
 """Inclusive valid value range of each integer label array (None: no upper bound)."""
 

@@ -31,6 +31,10 @@ SAMPLE_ARRAYS: dict[str, str] = {
     "damage": "uint8",
     "strain": "float32",
     "layer": "int16",
+    "fault_id": "int16",
+    "slip_m": "float32",
+    "dip_deg": "float32",
+    "sense": "uint8",
 }
 
 
@@ -85,6 +89,9 @@ def param_dtypes() -> dict[str, str]:
         "freq_hz": "float32",
         "snr_db": "float32",
         "noise_seed": "uint64",
+        "has_fault": "uint8",
+        "n_faults": "int16",
+        "max_slip_m": "float32",
     }
     for key, pdef in all_params().items():
         if key in out:
@@ -186,6 +193,8 @@ class ShardData:
 def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict[str, Any]) -> ShardData:
     """Sections and labels of every render of ``spec`` from its snapshots."""
     from demseis.labels import label_maps, strain_history
+    from demseis.labels.maps import sample_facts
+    from demseis.labels.traces import displacement_history
     from demseis.seismic import (
         add_noise,
         depth_to_time,
@@ -202,6 +211,8 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
     layer_props = draw_layer_properties(n_layers_total, model, rng_at(cfg, spec.run, 2))
     elem_seed = int(seed_sequence(cfg, spec.run, 2).generate_state(2, dtype=np.uint64)[1])
     history = strain_history(snapshots, cfg.labels)
+    disp = displacement_history(snapshots) if cfg.labels.method == "slip_trace" \
+        else [None] * len(snapshots)
 
     dtypes = array_dtypes(cfg)
     S = len(spec.renders)
@@ -217,14 +228,16 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
         snap = snapshots[k]
         vp_e, rho_e = element_properties(snap.ids, snap.layer, layer_props, model, elem_seed)
         vp_g, rho_g = property_grids(snap.xy, snap.radius, vp_e, rho_e, snap.layer, grid, model)
-        maps = dict(label_maps(snap, history[k], grid, cfg.labels))
+        maps = dict(label_maps(snap, history[k], grid, cfg.labels, displacement=disp[k]))
+        facts = sample_facts(maps)
         freqs = sorted({r.freq_hz for r in renders})
         impedance = vp_g * rho_g
         if t_s is None:
             sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs)
         else:
             sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs, domain="time", t_s=t_s)
-            fills = {"fault": 0, "damage": 0, "strain": 0.0, "layer": -1}
+            fills = {"fault": 0, "damage": 0, "strain": 0.0, "layer": -1, "fault_id": 0,
+                     "slip_m": 0.0, "dip_deg": 0.0, "sense": 0}
             for name, fill in fills.items():
                 maps[name] = depth_to_time(maps[name], vp_g, grid.cell_m, t_s, method="nearest", fill=fill)
             impedance = depth_to_time(impedance, vp_g, grid.cell_m, t_s, method="nearest", fill=0.0)
@@ -233,16 +246,16 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
             noisy = add_noise(clean, r.snr_db, r.noise_kind, np.random.default_rng(r.seed))
             i = r.sample
             arrays["seismic"][i] = noisy
-            arrays["fault"][i] = maps["fault"]
-            arrays["damage"][i] = maps["damage"]
-            arrays["strain"][i] = maps["strain"]
-            arrays["layer"][i] = maps["layer"]
+            for name in ("fault", "damage", "strain", "layer", "fault_id", "slip_m", "dip_deg",
+                         "sense"):
+                arrays[name][i] = maps[name]
             if "impedance" in arrays:
                 arrays["impedance"][i] = impedance
             row = {
                 "run_id": spec.run, "sample_in_run": i, "snapshot": k, "step": snap.step,
                 "throw_m": snap.throw_m, "n_elements": snap.n, "freq_hz": r.freq_hz,
                 "snr_db": r.snr_db, "noise_seed": r.seed, "noise_kind": r.noise_kind, **info,
+                **facts,
             }
             for key, value in {**p, **row}.items():
                 if key in PARAM_CODES:

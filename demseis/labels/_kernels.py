@@ -434,7 +434,7 @@ def ridge_nms(g, n_row, n_col, rock, threshold, out):
 
 
 @njit(cache=True)
-def jump_across(u_row, u_col, rock, rows, cols, n_row, n_col, k_min, k_max, out):
+def jump_across(u_row, u_col, rock, cohort, rows, cols, n_row, n_col, k_min, k_max, out):
     """Largest displacement jump across each trace point along its normal.
 
     For k = k_min..k_max cells the displacement (bilinear over rock cells) is sampled at
@@ -445,6 +445,9 @@ def jump_across(u_row, u_col, rock, rows, cols, n_row, n_col, k_min, k_max, out)
     ----------
     u_row, u_col : (nz, nx) float64 displacement components (m) along rows (down) and columns.
     rock : (nz, nx) bool.
+    cohort : (nz, nx) int64 first-appearance snapshot of each cell's element; an offset
+        counts only where the cells nearest the two samples belong to the same cohort
+        (displacements of different cohorts have different references).
     rows, cols : (m,) int64 trace cells.
     n_row, n_col : (m,) float64 unit normals of the trace at those cells.
     k_min, k_max : int, offsets (cells) tried, 1 <= k_min <= k_max.
@@ -465,6 +468,13 @@ def jump_across(u_row, u_col, rock, rows, cols, n_row, n_col, k_min, k_max, out)
             ub_r, ok3 = _bilinear_rock(u_row, rock, rb, cb)
             ub_c, ok4 = _bilinear_rock(u_col, rock, rb, cb)
             if not (ok1 and ok2 and ok3 and ok4):
+                continue
+            nz, nx = cohort.shape
+            ia = min(max(int(np.rint(ra)), 0), nz - 1)
+            ja = min(max(int(np.rint(ca)), 0), nx - 1)
+            ib = min(max(int(np.rint(rb)), 0), nz - 1)
+            jb = min(max(int(np.rint(cb)), 0), nx - 1)
+            if cohort[ia, ja] != cohort[ib, jb]:
                 continue
             dr = ua_r - ub_r
             dc = ua_c - ub_c

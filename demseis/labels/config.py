@@ -85,10 +85,10 @@ class LabelConfig:
     centreline_window_cells: int = 15
     method: str = "slip_trace"
     min_slip_m: float | None = None
-    ridge_threshold: float = 0.05
+    ridge_threshold: float = 0.15
     ridge_sigma_cells: float = 2.0
-    slip_offset_cells: int = 4
-    min_trace_cells: int = 8
+    slip_offset_cells: int = 3
+    min_trace_cells: int = 15
     link_angle_deg: float = 35.0
     link_gap_cells: int = 4
     damage_width_ratio: float = 1.0

@@ -413,7 +413,7 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
     if not crest.any():
         return empty
     t_r, t_c = local_direction(crest)
-    jump = _jump(crest, t_r, t_c, disp_x_m, disp_y_m, rock, cfg.slip_offset_cells)
+    jump = _jump(crest, t_r, t_c, disp_x_m, disp_y_m, rock, cfg.slip_offset_cells, cohort)
     slip = _along_trace_mean(crest, np.nan_to_num(jump[..., 0], nan=0.0),
                              np.isfinite(jump[..., 0]))
     crest_slip[crest] = slip[crest]
@@ -425,7 +425,7 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
     t_r, t_c = local_direction(trace)
     dip = dip_of(t_r, t_c)
     # sense: jump (upper side minus lower side) against the down-dip direction
-    jump = _jump(trace, t_r, t_c, disp_x_m, disp_y_m, rock, cfg.slip_offset_cells)
+    jump = _jump(trace, t_r, t_c, disp_x_m, disp_y_m, rock, cfg.slip_offset_cells, cohort)
     down_r, down_c = np.abs(t_r), np.where(t_r >= 0, t_c, -t_c)
     along = jump[..., 1] * down_r + jump[..., 2] * down_c
     sense = np.where(along >= 0, SENSE_NORMAL, SENSE_REVERSE).astype(np.uint8)
@@ -438,7 +438,8 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
 
 
 def _jump(cells: np.ndarray, t_r: np.ndarray, t_c: np.ndarray, disp_x_m: np.ndarray,
-          disp_y_m: np.ndarray, rock: np.ndarray, k_max: int) -> np.ndarray:
+          disp_y_m: np.ndarray, rock: np.ndarray, k_max: int,
+          cohort: np.ndarray | None = None) -> np.ndarray:
     """(nz, nx, 3) |jump|, jump row / col components at ``cells`` (NaN elsewhere).
 
     The normal points to the upper side (row decreasing; column increasing for a vertical
@@ -452,7 +453,9 @@ def _jump(cells: np.ndarray, t_r: np.ndarray, t_c: np.ndarray, disp_x_m: np.ndar
     u_row = np.ascontiguousarray(-np.asarray(disp_y_m, dtype=np.float64))
     u_col = np.ascontiguousarray(np.asarray(disp_x_m, dtype=np.float64))
     res = np.empty((rows.size, 3))
-    _kernels.jump_across(u_row, u_col, np.ascontiguousarray(rock), rows.astype(np.int64),
+    coh = np.zeros(cells.shape, np.int64) if cohort is None else cohort.astype(np.int64)
+    _kernels.jump_across(u_row, u_col, np.ascontiguousarray(rock), np.ascontiguousarray(coh),
+                         rows.astype(np.int64),
                          cols.astype(np.int64), n_r, n_c, 2, max(int(k_max), 2), res)
     out = np.full((*cells.shape, 3), np.nan)
     out[rows, cols] = res
