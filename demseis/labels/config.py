@@ -66,7 +66,10 @@ class LabelConfig:
     link_angle_deg : slip_trace: branches meeting at a junction are one fault when their
         directions are within this angle of a straight line, in [0, 90].
     link_gap_cells : slip_trace: gaps of up to about this many cells between crest pieces are
-        bridged (morphological closing with a disk of this diameter), in [0, 50].
+        bridged (the crest is grown by a disk of this diameter before thinning), in [0, 50].
+    min_dip_deg : slip_trace: crest cells whose direction (fitted over 9 x 9 cells) dips less
+        than this are not fault, in [0, 90]: bedding-parallel slip (flexural slip, slumping
+        at the free surface) is not what the labels are for; 0 keeps every dip.
     damage_width_ratio : slip_trace: damage-zone total width as a multiple of the local slip,
         in [0, 100] (see docs/labels.md for the published data behind the default).
     damage_max_width_m : slip_trace: upper bound of the damage-zone total width (m), in [0, 1e5].
@@ -90,7 +93,8 @@ class LabelConfig:
     slip_offset_cells: int = 3
     min_trace_cells: int = 15
     link_angle_deg: float = 35.0
-    link_gap_cells: int = 4
+    link_gap_cells: int = 0
+    min_dip_deg: float = 15.0
     damage_width_ratio: float = 1.0
     damage_max_width_m: float = 200.0
 
@@ -128,6 +132,7 @@ class LabelConfig:
         _integer("min_trace_cells", self.min_trace_cells, 1, 1_000_000)
         _number("link_angle_deg", self.link_angle_deg, 0.0, 90.0)
         _integer("link_gap_cells", self.link_gap_cells, 0, 50)
+        _number("min_dip_deg", self.min_dip_deg, 0.0, 90.0)
         _number("damage_width_ratio", self.damage_width_ratio, 0.0, 100.0)
         _number("damage_max_width_m", self.damage_max_width_m, 0.0, 1e5)
         return self

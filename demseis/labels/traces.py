@@ -18,7 +18,7 @@ method of :mod:`demseis.labels.maps`) turns such blobs into networks with loops 
    the element displacement (rasterised like the strain) is sampled ``k`` cells away on both
    sides along the normal, k = 2..``slip_offset_cells``; the largest |u(+k) - u(-k)| is the
    displacement jump (slip, m), averaged along the trace over 5 x 5 cells. A crest cell is fault
-   only where that slip is at least ``min_slip_m``.
+   only where that slip is at least ``min_slip_m`` and its dip at least ``min_dip_deg``.
 3. **Faults.** The kept cells are linked into traces: the skeleton is cut at its junctions, and
    at each junction the two branches that continue each other (directions within
    ``link_angle_deg`` of a straight line) are joined; the others (splays, antithetics, the
@@ -49,6 +49,9 @@ SENSE_NONE, SENSE_NORMAL, SENSE_REVERSE = 0, 1, 2
 
 #: window (cells) over which a trace's local direction is fitted (also the rung definition)
 DIRECTION_WINDOW = 9
+
+#: largest gap (cells) across which two facing trace ends are joined into one fault
+LINK_GAP_CELLS = 10.0
 
 
 @dataclass(frozen=True)
@@ -187,24 +190,64 @@ def crest_cells(field: np.ndarray, rock: np.ndarray, config: LabelConfig) -> np.
     _kernels.ridge_nms(np.ascontiguousarray(g), np.ascontiguousarray(n_r),
                        np.ascontiguousarray(n_c), np.ascontiguousarray(rock),
                        float(config.ridge_threshold), out)
-    crest = out.astype(bool)
+    # edge-replicated margin: lines leaving through the grid edge keep their ends through
+    # closing, thinning and spur pruning (which would otherwise shorten or fork them there)
     gap = int(config.link_gap_cells)
-    if gap > 0:  # bridge gaps of up to ~gap cells between pieces of one crest
-        disk = _disk(gap / 2.0)
-        pad = gap + 1
-        crest = ndimage.binary_closing(np.pad(crest, pad), structure=disk)[pad:-pad, pad:-pad]
-    skel = skeletonize(crest & rock)
-    skel = remove_small_components(skel, config.min_trace_cells)
     w = int(config.centreline_window_cells)
+    pad = gap + w + 2
+    crest = np.pad(out.astype(bool), pad, mode="edge")
+    if gap > 0:  # bridge gaps of up to ~gap cells: thin the crest grown by gap / 2
+        crest = ndimage.binary_dilation(crest, structure=_disk(gap / 2.0))
+    skel = skeletonize(crest)
     if w > 1 and skel.any():
         skel = prune_spurs(skel, w)
-    return skel
+    skel = skel[pad:-pad, pad:-pad] & rock
+    return remove_small_components(skel, config.min_trace_cells)
 
 
 def _disk(radius: float) -> np.ndarray:
     k = int(np.ceil(radius))
     yy, xx = np.mgrid[-k:k + 1, -k:k + 1]
     return xx * xx + yy * yy <= radius * radius + 1e-9
+
+
+def project_on_local_line(cells: np.ndarray, shift: np.ndarray, window: int) -> np.ndarray:
+    """Redraw a line mask with every cell moved onto the line fitted through its neighbours.
+
+    Each cell's position (its centre plus ``shift``, NaN = 0) is projected on the principal
+    axis of the positions of the line cells in the ``window`` x ``window`` box around it (a
+    moving-least-squares line), which removes element-scale stepping without cutting the line
+    into branches at its junctions; the projected points are rounded to cells, 1-cell gaps
+    closed and the result thinned to one cell.
+    """
+    c = np.asarray(cells, dtype=bool)
+    if not c.any() or window <= 1:
+        return c.copy()
+    w = c.astype(np.float64)
+    rr, cc = np.mgrid[0:c.shape[0], 0:c.shape[1]].astype(np.float64)
+    pr = rr + np.nan_to_num(shift[..., 0], nan=0.0)
+    pc = cc + np.nan_to_num(shift[..., 1], nan=0.0)
+
+    def box(a: np.ndarray) -> np.ndarray:
+        return ndimage.uniform_filter(a * w, size=window, mode="constant")
+
+    n = np.maximum(box(np.ones_like(w)), 1e-12)
+    mr, mc = box(pr) / n, box(pc) / n
+    crr = box(pr * pr) / n - mr * mr
+    ccc = box(pc * pc) / n - mc * mc
+    crc = box(pr * pc) / n - mr * mc
+    phi = 0.5 * np.arctan2(2.0 * crc, crr - ccc)
+    t_r, t_c = np.cos(phi), np.sin(phi)
+    rows, cols = np.nonzero(c)
+    a = (rows - mr[rows, cols]) * t_r[rows, cols] + (cols - mc[rows, cols]) * t_c[rows, cols]
+    qr = np.rint(mr[rows, cols] + a * t_r[rows, cols]).astype(np.int64)
+    qc = np.rint(mc[rows, cols] + a * t_c[rows, cols]).astype(np.int64)
+    ok = (qr >= 0) & (qr < c.shape[0]) & (qc >= 0) & (qc < c.shape[1])
+    out = np.zeros_like(c)
+    out[qr[ok], qc[ok]] = True
+    # rounding leaves gaps of a cell or two: the skeleton of the line grown by one cell
+    # bridges them (a closing would not: it erodes a one-cell line back to its gaps)
+    return skeletonize(ndimage.binary_dilation(out, structure=_EIGHT))
 
 
 def centre_on_jump(skel: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
@@ -282,13 +325,16 @@ def loop_count(skel: np.ndarray) -> int:
     return int(ndimage.label(holes)[1])
 
 
-def trace_instances(skel: np.ndarray, link_angle_deg: float = 35.0) -> np.ndarray:
+def trace_instances(skel: np.ndarray, link_angle_deg: float = 35.0,
+                    gap_cells: float = 8.0) -> np.ndarray:
     """Fault ids of a one-cell-wide trace network (0 off the trace, 1.. by size).
 
     Branches are the 8-connected pieces left when the junction cells (crossing number >= 3)
     and their neighbours are removed. At each junction, pairs of branches that continue each
     other (their directions away from the junction within ``link_angle_deg`` of opposite) are
-    joined, the straightest pair first; every other branch is a fault of its own. Junction
+    joined, the straightest pair first; every other branch is a fault of its own. Two branch
+    ends at most ``gap_cells`` apart that face each other (each end's direction within
+    ``link_angle_deg`` of the line joining them) are one fault across the gap. Junction
     cells take the id of the nearest branch cell.
     """
     s = np.asarray(skel, dtype=bool)
@@ -347,6 +393,28 @@ def trace_instances(skel: np.ndarray, link_angle_deg: float = 35.0) -> np.ndarra
                 continue
             used.update((a, b))
             parent[find(a)] = find(b)
+    # pieces of one fault separated by a short gap: end points facing each other
+    ends = np.argwhere((crossing_number(body) == 1) & body)
+    if ends.shape[0] >= 2:
+        e_lab = blab[ends[:, 0], ends[:, 1]]
+        e_dir = np.zeros((ends.shape[0], 2))
+        for q, (r_, c_) in enumerate(ends):  # direction from the piece into the gap
+            sel = (br_l == e_lab[q]) & ((br_r - r_) ** 2 + (br_c - c_) ** 2 <= reach * reach)
+            d = np.array([r_ - br_r[sel].mean(), c_ - br_c[sel].mean()])
+            nrm = np.hypot(*d)
+            e_dir[q] = d / nrm if nrm > 0 else 0.0
+        cos_gap = np.cos(np.radians(link_angle_deg))
+        for a in range(ends.shape[0]):
+            for b in range(a + 1, ends.shape[0]):
+                if e_lab[a] == e_lab[b]:
+                    continue
+                v = (ends[b] - ends[a]).astype(np.float64)
+                dist = np.hypot(*v)
+                if dist == 0 or dist > gap_cells:
+                    continue
+                v /= dist
+                if e_dir[a] @ v >= cos_gap and -(e_dir[b] @ v) >= cos_gap:
+                    parent[find(int(e_lab[a]))] = find(int(e_lab[b]))
     roots = np.array([find(i) for i in range(nb + 1)])
     lab = roots[blab]
     lab[~body] = 0
@@ -405,7 +473,8 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
     crest = crest_cells(field, rock, cfg)
     if crest.any():
         shift = centre_on_jump(crest, disp_x_m, disp_y_m, rock, cfg.slip_offset_cells)
-        crest = skeletonize(smooth_skeleton(crest, int(cfg.centreline_window_cells), shift)) & rock
+        crest = project_on_local_line(crest, shift, int(cfg.centreline_window_cells)) & rock
+        crest = remove_small_components(crest, cfg.min_trace_cells)
     crest_slip = np.full(shape, np.nan, dtype=np.float32)
     empty = Traces(trace=np.zeros(shape, bool), instance=np.zeros(shape, np.int32),
                    slip_m=np.zeros(shape, np.float32), dip_deg=np.zeros(shape, np.float32),
@@ -418,10 +487,12 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
                              np.isfinite(jump[..., 0]))
     crest_slip[crest] = slip[crest]
     trace = crest & (slip >= min_slip)
+    if cfg.min_dip_deg > 0:
+        trace &= dip_of(t_r, t_c) >= cfg.min_dip_deg
     trace = remove_small_components(trace, cfg.min_trace_cells)
     if not trace.any():
         return empty
-    inst = trace_instances(trace, cfg.link_angle_deg)
+    inst = trace_instances(trace, cfg.link_angle_deg, LINK_GAP_CELLS)
     t_r, t_c = local_direction(trace)
     dip = dip_of(t_r, t_c)
     # sense: jump (upper side minus lower side) against the down-dip direction
