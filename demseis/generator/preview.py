@@ -152,7 +152,9 @@ def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
     sec = synthetic_sections(vp_g, rho_g, grid.cell_m, [fmax])[0]
     clip = float(np.percentile(np.abs(sec), 99)) or 1.0
     hist = strain_history(snaps, cfg.labels)
-    maps = label_maps(last, hist[-1], grid, cfg.labels)
+    from demseis.labels.traces import displacement_history
+
+    maps = label_maps(last, hist[-1], grid, cfg.labels, displacement=displacement_history(snaps)[-1])
     fig, axes = plt.subplots(1, 3, figsize=(18, 3.4))
     axes[0].imshow(sec, extent=extent, cmap="seismic", vmin=-clip, vmax=clip, aspect="equal")
     axes[0].set_title(f"(a) {fmax:g} Hz section")

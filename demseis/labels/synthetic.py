@@ -110,7 +110,7 @@ def kinematic_fault(
     *,
     x_m: float,
     dip_deg: float,
-    slip_m: float,
+    slip_m: float | np.ndarray,
     dip_direction: str = "right",
     zone_width_m: float = 0.0,
 ) -> np.ndarray:
@@ -126,7 +126,9 @@ def kinematic_fault(
     xy : (n, 2) centres (m, y up).
     x_m : where the fault meets y = 0.
     dip_deg : dip in (0, 90) degrees.
-    slip_m : down-dip slip (m), >= 0 (a normal fault).
+    slip_m : down-dip slip (m), >= 0 (a normal fault); a scalar or one value per element
+        (slip varying along the fault: give each hanging-wall element the slip of its part
+        of the fault).
     dip_direction : ``"right"`` or ``"left"`` (side of the hanging wall).
     zone_width_m : shear-zone width (m), >= 0.
 
@@ -134,9 +136,12 @@ def kinematic_fault(
     -------
     (n, 2) float64 displaced centres.
     """
-    if slip_m < 0 or zone_width_m < 0:
+    slip = np.asarray(slip_m, dtype=np.float64)
+    if np.any(slip < 0) or zone_width_m < 0:
         raise InputError(f"slip_m = {slip_m}, zone_width_m = {zone_width_m}; both must be >= 0")
     xy = np.asarray(xy, dtype=np.float64)
+    if slip.ndim == 1 and slip.shape[0] != xy.shape[0]:
+        raise InputError(f"slip_m has shape {slip.shape}; expected a scalar or ({xy.shape[0]},)")
     d = fault_signed_distance(xy, x_m, dip_deg, dip_direction)
     th = np.radians(dip_deg)
     s = 1.0 if dip_direction == "right" else -1.0
@@ -145,4 +150,39 @@ def kinematic_fault(
         frac = np.clip(d / zone_width_m + 0.5, 0.0, 1.0)
     else:
         frac = (d > 0).astype(np.float64)
-    return xy + slip_m * frac[:, None] * down_dip[None, :]
+    return xy + (slip * frac)[:, None] * down_dip[None, :]
+
+
+def listric_fault(xy: np.ndarray, *, centre_xy: tuple[float, float], radius_m: float,
+                  slip_m: float) -> np.ndarray:
+    """Element centres after slip on a listric (circular-arc) normal fault.
+
+    The fault is the circle of ``radius_m`` around ``centre_xy``; the hanging wall (the
+    points inside the circle) rotates rigidly about the centre by ``slip_m / radius_m``
+    radians, so it slides ``slip_m`` along the arc everywhere and stays in contact with it.
+    With the centre up and to the right of the fault, the hanging wall is on the right and
+    the fault flattens with depth (dip = 90 deg at the centre's height).
+
+    Parameters
+    ----------
+    xy : (n, 2) centres (m, y up).
+    centre_xy : (x, y) of the arc's centre (m).
+    radius_m : arc radius (m), > 0.
+    slip_m : slip along the arc (m), >= 0; the hanging wall moves down the fault on the
+        centre's left.
+
+    Returns
+    -------
+    (n, 2) float64 displaced centres.
+    """
+    if radius_m <= 0 or slip_m < 0:
+        raise InputError(f"radius_m = {radius_m} must be > 0 and slip_m = {slip_m} >= 0")
+    xy = np.asarray(xy, dtype=np.float64)
+    c = np.asarray(centre_xy, dtype=np.float64)
+    d = xy - c
+    inside = np.hypot(d[:, 0], d[:, 1]) < radius_m
+    phi = slip_m / radius_m  # counter-clockwise: down the arc left of the centre
+    rot = np.array([[np.cos(phi), -np.sin(phi)], [np.sin(phi), np.cos(phi)]])
+    out = xy.copy()
+    out[inside] = c + d[inside] @ rot.T
+    return out

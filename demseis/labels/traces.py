@@ -190,12 +190,10 @@ def crest_cells(field: np.ndarray, rock: np.ndarray, config: LabelConfig) -> np.
     _kernels.ridge_nms(np.ascontiguousarray(g), np.ascontiguousarray(n_r),
                        np.ascontiguousarray(n_c), np.ascontiguousarray(rock),
                        float(config.ridge_threshold), out)
-    # edge-replicated margin: lines leaving through the grid edge keep their ends through
-    # closing, thinning and spur pruning (which would otherwise shorten or fork them there)
     gap = int(config.link_gap_cells)
     w = int(config.centreline_window_cells)
-    pad = gap + w + 2
-    crest = np.pad(out.astype(bool), pad, mode="edge")
+    pad = gap + 2
+    crest = np.pad(out.astype(bool), pad)
     if gap > 0:  # bridge gaps of up to ~gap cells: thin the crest grown by gap / 2
         crest = ndimage.binary_dilation(crest, structure=_disk(gap / 2.0))
     skel = skeletonize(crest)
@@ -341,7 +339,9 @@ def trace_instances(skel: np.ndarray, link_angle_deg: float = 35.0,
     out = np.zeros(s.shape, dtype=np.int32)
     if not s.any():
         return out
-    junction = (crossing_number(s) >= 3) & s
+    # a crossing drawn as a 2 x 2 block has crossing number 2 everywhere: 4+ neighbours too
+    nbrs = ndimage.convolve(s.astype(np.int32), np.ones((3, 3), np.int32), mode="constant") - 1
+    junction = ((crossing_number(s) >= 3) | (nbrs >= 4)) & s
     zone = ndimage.binary_dilation(junction, structure=_EIGHT) & s
     body = s & ~zone
     blab, nb = ndimage.label(body, structure=_EIGHT)

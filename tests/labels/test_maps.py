@@ -63,7 +63,7 @@ def test_kinematic_fault_mask_lies_on_the_line(pack_fault, dip, slip):
     for xy, r in pack_fault:
         cur = kinematic_fault(xy, x_m=XF, dip_deg=dip, slip_m=slip)
         res = element_strain(xy, cur, r)
-        maps = label_maps(snap_of(cur, r), res.gamma_max, grid, LabelConfig())
+        maps = label_maps(snap_of(cur, r), res.gamma_max, grid, LabelConfig(method="strain_band"))
         on_line, covered = line_metrics(maps["fault"], grid, dip, slip)
         assert on_line >= 0.9, (dip, slip, on_line)
         assert covered >= 0.9, (dip, slip, covered)
@@ -99,12 +99,12 @@ def test_thickness_control_is_monotonic_and_near_target(pack_fault):
     g = element_strain(xy, cur, r).gamma_max
     measured = []
     for t in (1.0, 3.0, 5.0, 7.0):
-        m = label_maps(snap_of(cur, r), g, grid, LabelConfig(thickness_cells=t))["fault"]
+        m = label_maps(snap_of(cur, r), g, grid, LabelConfig(method="strain_band", thickness_cells=t))["fault"]
         measured.append(mask_thickness_cells(m))
     assert np.all(np.diff(measured) > 0.5), measured
     for t, got in zip((3.0, 5.0, 7.0), measured[1:]):
         assert abs(got / t - 1) < 0.25, (t, got)
-    raw = label_maps(snap_of(cur, r), g, grid, LabelConfig(thickness_cells=0.0))["fault"]
+    raw = label_maps(snap_of(cur, r), g, grid, LabelConfig(method="strain_band", thickness_cells=0.0))["fault"]
     assert mask_thickness_cells(raw) > measured[1]  # thresholded band is wider than 3 cells
 
 
@@ -127,7 +127,7 @@ def test_damage_classes_nest(pack_fault):
     cur = kinematic_fault(xy, x_m=XF, dip_deg=50.0, slip_m=60.0, zone_width_m=300.0)
     cur = kinematic_fault(cur, x_m=XF, dip_deg=50.0, slip_m=80.0)
     g = element_strain(xy, cur, r).gamma_max
-    cfg = LabelConfig(thickness_cells=0.0, damage_threshold=0.15)
+    cfg = LabelConfig(method="strain_band", thickness_cells=0.0, damage_threshold=0.15)
     maps = label_maps(snap_of(cur, r), g, grid, cfg)
     dmg, flt = maps["damage"], maps["fault"]
     assert dmg.dtype == np.uint8 and flt.dtype == np.uint8
@@ -136,7 +136,7 @@ def test_damage_classes_nest(pack_fault):
     # the damage zone (shear zone gamma = 0.2 > damage_threshold) is wider than the core
     assert (dmg == 1).sum() > (dmg == 2).sum()
     lower = label_maps(snap_of(cur, r), g, grid,
-                       LabelConfig(thickness_cells=0.0, damage_threshold=0.05))["damage"]
+                       LabelConfig(method="strain_band", thickness_cells=0.0, damage_threshold=0.05))["damage"]
     assert ((lower >= 1).sum() >= (dmg >= 1).sum())
 
 
@@ -146,7 +146,7 @@ def test_strain_target_and_layer_map(pack_small):
     layer = np.minimum(xy[:, 1] // 100, 4).astype(np.int16)
     grid = Grid(x0_m=0.0, top_m=600.0, cell_m=10.0, nz=60, nx=80)
     g = np.abs(np.sin(xy[:, 0] / 97.0))
-    maps = label_maps(snap_of(xy, r, layer), g, grid, LabelConfig())
+    maps = label_maps(snap_of(xy, r, layer), g, grid, LabelConfig(method="strain_band"))
     st, lay = maps["strain"], maps["layer"]
     assert st.dtype == np.float32 and lay.dtype == np.int16 and st.shape == grid.shape
     assert np.all(np.isfinite(st))
@@ -181,9 +181,9 @@ def test_label_maps_accepts_strain_state_and_is_deterministic(pack_small):
     snaps = [snap_of(xy, r, index=0), snap_of(cur, r, index=1)]
     hist = strain_history(snaps)
     grid = Grid.covering(800.0, 500.0, 10.0)
-    a = label_maps(snaps[1], hist[1], grid, LabelConfig(strain_measure="total"))
-    b = label_maps(snaps[1], hist[1].total, grid, LabelConfig())
-    c = label_maps(snaps[1], hist[1].total, grid, LabelConfig())
+    a = label_maps(snaps[1], hist[1], grid, LabelConfig(method="strain_band", strain_measure="total"))
+    b = label_maps(snaps[1], hist[1].total, grid, LabelConfig(method="strain_band"))
+    c = label_maps(snaps[1], hist[1].total, grid, LabelConfig(method="strain_band"))
     for key in ("fault", "damage", "strain", "layer"):
         assert np.array_equal(a[key], b[key]) and a[key].tobytes() == c[key].tobytes()
     assert a["fault"].sum() > 0
