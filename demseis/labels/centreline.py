@@ -99,8 +99,7 @@ def prune_spurs(skel: np.ndarray, max_len: int) -> np.ndarray:
     return skel
 
 
-def smooth_skeleton(skel: np.ndarray, window_cells: int,
-                    shift: np.ndarray | None = None) -> np.ndarray:
+def smooth_skeleton(skel: np.ndarray, window_cells: int) -> np.ndarray:
     """Redraw every junction-free branch of ``skel`` with its coordinates moving-averaged.
 
     Parameters
@@ -108,15 +107,13 @@ def smooth_skeleton(skel: np.ndarray, window_cells: int,
     skel : (nz, nx) bool one-cell-wide skeleton.
     window_cells : moving-average length along the branch (cells); the window shrinks
         symmetrically near branch ends, so end points stay put. <= 1 returns a copy.
-    shift : optional (nz, nx, 2) offset (rows, cols) added to each cell's coordinates before
-        the averaging (a sub-cell correction of where the line should be); NaN = none.
 
     Returns
     -------
     (nz, nx) bool smoothed centre line (junction cells kept as they are).
     """
     skel = np.asarray(skel, dtype=bool)
-    if (window_cells <= 1 and shift is None) or not skel.any():
+    if window_cells <= 1 or not skel.any():
         return skel.copy()
     half = int(window_cells) // 2
     nz, nx = skel.shape
@@ -143,9 +140,6 @@ def smooth_skeleton(skel: np.ndarray, window_cells: int,
             start = min(pixels)
         path = np.array(_trace(pixels, start), dtype=np.float64)
         rest = pixels - set(map(tuple, path.astype(int).tolist()))
-        if shift is not None:
-            pi = path.astype(int)
-            path = path + np.nan_to_num(shift[pi[:, 0], pi[:, 1]], nan=0.0)
         m = path.shape[0]
         if m >= 3:
             c = np.vstack([np.zeros((1, 2)), np.cumsum(path, axis=0)])

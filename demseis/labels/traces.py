@@ -38,7 +38,7 @@ from scipy import ndimage
 
 from demseis.errors import InputError
 from demseis.labels import _kernels
-from demseis.labels.centreline import crossing_number, prune_spurs, smooth_skeleton
+from demseis.labels.centreline import crossing_number, prune_spurs
 from demseis.labels.config import LabelConfig
 from demseis.labels.maps import remove_small_components, skeletonize
 

@@ -12,12 +12,11 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from demseis.dem.types import Snapshot
 from demseis.errors import ConfigError, InputError
 from demseis.labels import LabelConfig, label_maps, strain_history
 from demseis.labels import _kernels
 from demseis.labels.maps import sample_facts
-from demseis.labels.synthetic import (
+from demseis.testing import (
     disk_pack,
     fault_signed_distance,
     kinematic_fault,
@@ -30,7 +29,7 @@ from demseis.labels.traces import (
     rung_fraction,
     trace_instances,
 )
-from demseis.seismic.grid import Grid
+from demseis.types import Grid, Snapshot
 
 W, H, XF, CELL = 2000.0, 1000.0, 1200.0, 10.0
 _NINE = np.ones((3, 3), dtype=bool)
