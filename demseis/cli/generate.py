@@ -1,4 +1,5 @@
-"""``demseis generate`` and ``demseis render``: write a dataset, re-render a store's snapshots."""
+"""``demseis generate``, ``render`` and ``relabel``: write a dataset, re-render or relabel a store's
+snapshots."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from demseis.errors import InputError
 
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``generate`` and ``render``."""
+    """Add ``generate``, ``render`` and ``relabel``."""
     p = sub.add_parser(
         "generate",
         help="run a sweep and write a labelled dataset (resumes an interrupted one)",
@@ -37,6 +38,15 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.add_argument("--overwrite", action="store_true", help="replace --out if it is a demseis store")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("relabel", help="new labels for a store's particle snapshots (same seismic)")
+    p.add_argument("store", help="source store (its DEM snapshots are reused)")
+    p.add_argument("--labels", required=True,
+                   help="TOML file with a [labels] table (keys not given take their defaults)")
+    p.add_argument("--out", required=True, help="new store path")
+    p.add_argument("--overwrite", action="store_true", help="replace --out if it is a demseis store")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_relabel)
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
@@ -75,5 +85,28 @@ def cmd_render(args: argparse.Namespace) -> int:
     snrs = _float_list(args.snr, "--snr")
     summary = rerender(args.store, args.out, freqs_hz=freqs, snrs_db=snrs, noise_kind=args.noise,
                        overwrite=args.overwrite, progress=not args.quiet)
+    print("\n".join(summary.lines()))
+    return 1 if summary.failed else 0
+
+
+def cmd_relabel(args: argparse.Namespace) -> int:
+    import tomllib
+
+    from demseis.errors import ConfigError
+    from demseis.generator.rerender import relabel
+
+    try:
+        with open(args.labels, "rb") as fh:
+            table = tomllib.load(fh)
+    except FileNotFoundError:
+        raise InputError(f"--labels {args.labels!r}: no such file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"--labels {args.labels!r}: not valid TOML ({exc})") from None
+    unknown = sorted(set(table) - {"labels"})
+    if unknown or not isinstance(table.get("labels", {}), dict):
+        raise ConfigError(f"--labels {args.labels!r}: expected only a [labels] table, "
+                          f"got {', '.join(unknown) or 'labels = a non-table'}")
+    summary = relabel(args.store, args.out, labels=table.get("labels", {}),
+                      overwrite=args.overwrite, progress=not args.quiet)
     print("\n".join(summary.lines()))
     return 1 if summary.failed else 0

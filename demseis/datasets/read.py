@@ -183,7 +183,8 @@ def store_summary(path: str | Path) -> list[str]:
                  f"done shards: {int((status == 1).sum())}")
     grid = attrs.get("grid", {})
     lines.append(f"grid: {h} x {w} cells of {grid.get('cell_m')} m")
-    for name in ("seismic", "fault", "damage", "strain", "layer", "impedance"):
+    for name in ("seismic", "fault", "damage", "strain", "layer", "impedance", "fault_id",
+                 "slip_m", "dip_deg", "sense"):
         if name in root:
             a = root[name]
             lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks {tuple(a.chunks)}")
@@ -203,6 +204,11 @@ def store_summary(path: str | Path) -> list[str]:
         else:
             shown = f"{_fmt(vals.min())} .. {_fmt(vals.max())} ({uniq.size} distinct)"
         lines.append(f"  {name:22s} {shown}")
+    params = read_params(root, int(n))
+    if "has_fault" in params and done.any():
+        none = int((params["has_fault"][done] == 0).sum())
+        lines.append(f"samples without a fault: {none} of {int(done.sum())} done "
+                     f"(select faulted ones with where={{'has_fault': 1}})")
     if cfg:
         sw = cfg.get("sweep", {})
         model = cfg.get("model", {})

@@ -1,4 +1,5 @@
-"""``demseis render``: new sections from a store's particle snapshots, without the DEM."""
+"""``demseis render`` and ``demseis relabel``: new sections or new labels from a store's particle
+snapshots, without the DEM."""
 
 from __future__ import annotations
 
@@ -34,11 +35,49 @@ def rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snrs
 
     Runs that are not done in the source are recorded as failed in the new store.
     """
+    from demseis.datasets import open_store
+
+    src = Path(source)
+    root = open_store(src)
+    cfg = rerender_config(dict(root.attrs)["config"], freqs_hz, snrs_db, noise_kind)
+    return _redo(src, out, cfg, overwrite=overwrite, progress=progress)
+
+
+def relabel_config(source_cfg: dict[str, Any], labels: dict[str, Any]) -> Config:
+    """The source config with its ``[labels]`` table replaced (everything else unchanged, so
+    the same runs, renders and noise seeds give byte-identical seismic)."""
+    raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in source_cfg.items()}
+    raw["labels"] = dict(labels)
+    return parse_config(raw, source="relabel config")
+
+
+def relabel(source: str | Path, out: str | Path, *, labels: dict[str, Any],
+            overwrite: bool = False, progress: bool = True) -> SweepSummary:
+    """Write a new store with the seismic of ``source`` and labels made with ``labels``.
+
+    Parameters
+    ----------
+    source : a demseis store with particle snapshots.
+    out : the new store (must differ from ``source``).
+    labels : a ``[labels]`` table (:class:`demseis.labels.LabelConfig` keys); keys not given
+        take their defaults, not the source's values.
+    overwrite, progress : as for :func:`rerender`.
+    """
+    from demseis.datasets import open_store
+
+    src = Path(source)
+    root = open_store(src)
+    cfg = relabel_config(dict(root.attrs)["config"], labels)
+    return _redo(src, out, cfg, overwrite=overwrite, progress=progress)
+
+
+def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
+          progress: bool) -> SweepSummary:
+    """Render and label every done run of ``src`` again with ``cfg`` into ``out``."""
     import time
 
     from demseis.datasets import (
         finalize_store,
-        open_store,
         read_particles,
         record_failures,
         shard_status,
@@ -46,11 +85,8 @@ def rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snrs
     )
 
     t0 = time.perf_counter()
-    src = Path(source)
-    root = open_store(src)
     if Path(out).resolve() == src.resolve():
         raise StoreError("--out must differ from the source store")
-    cfg = rerender_config(dict(root.attrs)["config"], freqs_hz, snrs_db, noise_kind)
     src_status = shard_status(src)
     status = prepare_store(cfg, out, overwrite=overwrite)
     pending = [int(i) for i in np.flatnonzero(status != 1)]
