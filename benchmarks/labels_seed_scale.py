@@ -1,5 +1,6 @@
-"""Labels on the seed-scale model: figure (labels over seismic, like the paper's Fig. 5b) and
-label thickness at the defaults and under the thickness control. Prints one JSON line.
+"""Labels on the seed-scale model: figure (slip-trace labels over seismic, like the paper's
+Fig. 5b, next to the legacy strain-band labels) and per-snapshot facts (faults, slip, rungs,
+loops, damage-zone width) of both methods. Prints one JSON line.
 
 Needs demseis.dem (simulate) and demseis.seismic (synthetic_sections) importable. Either pass
 pickled snapshots (a list of Snapshot) with --snapshots, or let it run the DEM:
@@ -47,12 +48,8 @@ def main() -> None:
     import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
 
-    from demseis.labels import (
-        LabelConfig,
-        label_maps,
-        mask_thickness_cells,
-        strain_history,
-    )
+    from demseis.labels import LabelConfig, label_maps, strain_history
+    from demseis.labels.maps import skeleton_length_cells
     from demseis.types import Grid
     from demseis.seismic import (
         PropertyModel,
@@ -62,50 +59,51 @@ def main() -> None:
         synthetic_sections,
     )
 
+    from demseis.labels.traces import displacement_history, loop_count, rung_fraction
+
     snaps = _snapshots(args.snapshots)
     if args.save_snapshots:
         with open(args.save_snapshots, "wb") as fh:
             pickle.dump(snaps, fh)
     cfg = LabelConfig()
+    old = LabelConfig(method="strain_band")
     grid = Grid.covering(5000.0, 2770.0, 10.0)
     t0 = time.perf_counter()
     hist = strain_history(snaps, cfg)
+    disp = displacement_history(snaps)
     t_hist = time.perf_counter() - t0
     out = {"benchmark": "labels_seed_scale", "n_elements": [int(s.n) for s in snaps],
            "throw_m": [round(float(s.throw_m), 1) for s in snaps],
            "strain_history_s": round(t_hist, 3), "config": cfg.__dict__}
     per_snap = []
-    maps_all = []
-    for s, h in zip(snaps, hist):
-        m = label_maps(s, h, grid, cfg)
-        raw = label_maps(s, h, grid, LabelConfig(thickness_cells=0.0))["fault"]
+    maps_all, old_all = [], []
+    t_maps = []
+    for s, h, d in zip(snaps, hist, disp):
+        t1 = time.perf_counter()
+        m = label_maps(s, h, grid, cfg, displacement=d)
+        t_maps.append(time.perf_counter() - t1)
+        mo = label_maps(s, h, grid, old)
         maps_all.append(m)
-        per_snap.append({"index": int(s.index), "fault_cells": int(m["fault"].sum()),
-                         "damage_cells": int((m["damage"] == 1).sum()),
-                         "thickness_default_cells": _r(mask_thickness_cells(m["fault"])),
-                         "thickness_thresholded_cells": _r(mask_thickness_cells(raw))})
+        old_all.append(mo)
+        f, fo = m["fault"] > 0, mo["fault"] > 0
+        rock = int((m["layer"] >= 0).sum())
+        dz = m["damage"] >= 1
+        length = skeleton_length_cells(f)
+        per_snap.append({
+            "index": int(s.index), "throw_m": round(float(s.throw_m), 1),
+            "fault_cells": int(f.sum()), "n_faults": int(np.unique(m["fault_id"][f]).size),
+            "max_slip_m": _r(float(m["slip_m"].max())),
+            "median_slip_m": _r(float(np.median(m["slip_m"][f]))) if f.any() else None,
+            "rungs": _r(rung_fraction(f)), "loops": loop_count(f),
+            "damage_share_of_rock": round(float(dz.sum()) / rock, 4),
+            # mean damage-zone width: damage area / trace length
+            "damage_width_m": _r(float(dz.sum()) / length * grid.cell_m) if length else None,
+            "old_fault_cells": int(fo.sum()), "old_rungs": _r(rung_fraction(fo)),
+            "old_loops": loop_count(fo),
+            "old_damage_share_of_rock": round(float((mo["damage"] >= 1).sum()) / rock, 4)})
     out["per_snapshot"] = per_snap
-    last, hl = snaps[-1], hist[-1]
-    control = {}
-    for t in (0.0, 1.0, 3.0, 5.0, 7.0):
-        f = label_maps(last, hl, grid, LabelConfig(thickness_cells=t))["fault"]
-        control[str(t)] = {"measured_cells": _r(mask_thickness_cells(f)), "cells": int(f.sum())}
-    out["thickness_control_final"] = control
-    # threshold check: fault cells / 8-connected components per snapshot, damage share of rock
-    from scipy import ndimage
-
-    sweep = {}
-    for ft, dt in ((0.5, 0.3), (0.75, 0.3), (1.0, 0.3), (0.5, 0.15), (0.5, 0.5)):
-        c = LabelConfig(fault_threshold=ft, damage_threshold=dt)
-        rows = []
-        for s, h in zip(snaps[1:], hist[1:]):
-            mm = label_maps(s, h, grid, c)
-            rock = int((mm["layer"] >= 0).sum())
-            rows.append([int(mm["fault"].sum()),
-                         int(ndimage.label(mm["fault"], structure=np.ones((3, 3)))[1]),
-                         round(float((mm["damage"] >= 1).sum()) / rock, 3)])
-        sweep[f"fault>={ft},damage>={dt}"] = rows
-    out["threshold_sweep_[fault_cells,components,damage_share]_snapshots_1_on"] = sweep
+    out["label_maps_s_per_snapshot_median"] = round(float(np.median(t_maps)), 3)
+    last = snaps[-1]
 
     # seismic of the final snapshot
     model = PropertyModel()
@@ -114,37 +112,44 @@ def main() -> None:
     vp_e, rho_e = element_properties(last.ids, last.layer, lp, model, 7)
     vp_g, rho_g = property_grids(last.xy, last.radius, vp_e, rho_e, last.layer, grid, model)
     sec = synthetic_sections(vp_g, rho_g, grid.cell_m, [args.freq_hz])[0]
-    m = maps_all[-1]
-    m3 = label_maps(last, hl, grid, LabelConfig(thickness_cells=3.0))
+    m, mo = maps_all[-1], old_all[-1]
     ext = [grid.x0_m, grid.x0_m + grid.nx * grid.cell_m, grid.top_m - grid.nz * grid.cell_m,
            grid.top_m]
     clip = np.percentile(np.abs(sec), 99)
     fig, ax = plt.subplots(2, 2, figsize=(16, 9.5), constrained_layout=True)
+
+    def seis(a):
+        a.imshow(sec, cmap="gray_r", vmin=-clip, vmax=clip, extent=ext, aspect="equal")
+
     a = ax[0, 0]
-    a.imshow(sec, cmap="gray_r", vmin=-clip, vmax=clip, extent=ext, aspect="equal")
+    seis(a)
     a.set_title(f"(a) {args.freq_hz:.0f} Hz seismic, throw {last.throw_m:.0f} m")
     a = ax[0, 1]
-    a.imshow(sec, cmap="gray_r", vmin=-clip, vmax=clip, extent=ext, aspect="equal")
-    dmg = np.ma.masked_equal(np.where(m3["fault"] > 0, 2, m["damage"]), 0)
-    a.imshow(dmg, cmap=ListedColormap(["#ffb000", "#d00000"]), vmin=1, vmax=2, alpha=0.55,
-             extent=ext, aspect="equal", interpolation="nearest")
-    a.set_title(f"(b) labels: damage zone (orange, >= {cfg.damage_threshold}), "
-                f"fault (red, >= {cfg.fault_threshold}, 3 cells)")
-    a = ax[1, 0]
-    im = a.imshow(np.log10(np.maximum(m["strain"], 1e-3)), cmap="magma", vmin=-2, vmax=1,
-                  extent=ext, aspect="equal")
-    fig.colorbar(im, ax=a, shrink=0.8, label=f"log10 {cfg.strain_measure} gamma_max")
-    a.set_title("(c) strain regression target")
-    a = ax[1, 1]
-    lay = np.ma.masked_less(m["layer"], 0)
-    a.imshow(lay % 2, cmap="Greys", vmin=-1, vmax=2, extent=ext, aspect="equal",
+    seis(a)
+    a.imshow(np.ma.masked_equal((m["damage"] == 1).astype(np.uint8), 0),
+             cmap=ListedColormap(["#ffb000"]), alpha=0.35, extent=ext, aspect="equal",
              interpolation="nearest")
-    a.imshow(np.ma.masked_equal(m3["fault"], 0), cmap=ListedColormap(["#0050ff"]), alpha=0.9,
+    fid = np.ma.masked_equal(m["fault_id"].astype(float), 0)
+    a.imshow(fid, cmap="tab10", vmin=0.5, vmax=10.5, extent=ext, aspect="equal",
+             interpolation="nearest")
+    a.set_title(f"(b) slip-trace labels: {per_snap[-1]['n_faults']} faults (colour = id), "
+                f"damage zone (orange, width = slip, <= {cfg.damage_max_width_m:.0f} m)")
+    a = ax[1, 0]
+    seis(a)
+    a.imshow(np.ma.masked_equal((mo["damage"] == 1).astype(np.uint8), 0),
+             cmap=ListedColormap(["#ffb000"]), alpha=0.35, extent=ext, aspect="equal",
+             interpolation="nearest")
+    a.imshow(np.ma.masked_equal(mo["fault"], 0), cmap=ListedColormap(["#d00000"]),
              extent=ext, aspect="equal", interpolation="nearest")
-    a.imshow(np.ma.masked_equal(m["fault"], 0), cmap=ListedColormap(["#d00000"]),
-             extent=ext, aspect="equal", interpolation="nearest")
-    a.set_title("(d) layer-id map (alternate layers) with fault mask: 1-cell (red) on "
-                "3-cell (blue)")
+    a.set_title("(c) legacy strain-band labels (method = \"strain_band\"): fault (red), "
+                f"damage (orange, gamma >= {old.damage_threshold})")
+    a = ax[1, 1]
+    im = a.imshow(np.log10(np.maximum(m["strain"], 1e-3)), cmap="Greys", vmin=-2, vmax=1,
+                  extent=ext, aspect="equal")
+    sl = np.ma.masked_equal(m["slip_m"], 0)
+    im2 = a.imshow(sl, cmap="plasma", extent=ext, aspect="equal", interpolation="nearest")
+    fig.colorbar(im2, ax=a, shrink=0.8, label="slip_m on the traces")
+    a.set_title(f"(d) slip along the traces over log10 {cfg.strain_measure} gamma_max")
     for a in ax.ravel():
         a.set_xlabel("x (m)")
         a.set_ylabel("elevation (m)")

@@ -228,9 +228,19 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     axes[0].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect="equal")
     axes[0].set_title(f"seismic: {float(p['freq_hz']):g} Hz, SNR {float(p['snr_db']):g} dB ({noise})")
     axes[1].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect="equal")
-    axes[1].imshow(np.ma.masked_equal(fault, 0), cmap=ListedColormap(["red"]), extent=extent,
-                   aspect="equal", interpolation="nearest")
-    axes[1].set_title("fault label (red) over the section")
+    if "fault_id" in root:  # slip-trace labels: one colour per fault instance
+        fid = np.asarray(root["fault_id"][index]).astype(float)
+        fid[fault == 0] = 0
+        axes[1].imshow(np.ma.masked_equal(fid, 0), cmap="tab10", vmin=0.5, vmax=10.5,
+                       extent=extent, aspect="equal", interpolation="nearest")
+        n_f = int(np.unique(fid[fid > 0]).size)
+        slip = np.asarray(root["slip_m"][index])
+        axes[1].set_title(f"fault label over the section: {n_f} faults (colour = id), "
+                          f"max slip {float(slip.max()):.0f} m")
+    else:
+        axes[1].imshow(np.ma.masked_equal(fault, 0), cmap=ListedColormap(["red"]),
+                       extent=extent, aspect="equal", interpolation="nearest")
+        axes[1].set_title("fault label (red) over the section")
     axes[2].imshow(damage, cmap="magma", vmin=0, vmax=2, extent=extent, aspect="equal",
                    interpolation="nearest")
     axes[2].set_title("damage: 0 background, 1 damage zone, 2 fault core")

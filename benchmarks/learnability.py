@@ -1,0 +1,87 @@
+"""How well a U-Net learns a store's fault labels: train on the train runs, score held-out runs.
+
+Trains the examples' U-Net (:func:`demseis.evaluation.train.train_unet`) for a fixed number of
+steps on random crops of the ``train`` runs of STORE, predicts whole sections of (a sample of)
+the train runs and of the held-out runs, and scores both against the store's ``fault`` labels
+at tolerances 2 and 4 px (precision / recall / F1 at threshold 0.5, and AP). Prints one JSON
+line. CUDA when present (default 3000 steps, base 32), else a CPU budget (default 300 steps,
+base 16). Runs are split 75 / 0 / 25 % train / val / test by default (held-out = test).
+
+Comparing label sets: make stores that differ only in their labels with ``demseis relabel``
+(same seismic bytes), then run this on each with the same ``--seed`` and budget.
+
+    PYTHONPATH=$PWD python benchmarks/learnability.py STORE [--steps N] [--seed 0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import time
+
+import numpy as np
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("store")
+    ap.add_argument("--steps", type=int, help="optimiser steps (default 3000 CUDA / 300 CPU)")
+    ap.add_argument("--base", type=int, help="U-Net base width (default 32 CUDA / 16 CPU)")
+    ap.add_argument("--crop", type=int, default=96)
+    ap.add_argument("--batch", type=int, default=8)
+    ap.add_argument("--lr", type=float, default=2e-3)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--threads", type=int, default=2, help="torch CPU threads")
+    ap.add_argument("--test-fraction", type=float, default=0.25, help="share of runs held out")
+    ap.add_argument("--max-train-eval", type=int, default=96,
+                    help="train samples scored (a fixed random subset)")
+    ap.add_argument("--device", help="cuda / cpu (default: cuda when available)")
+    args = ap.parse_args(argv)
+
+    import torch
+
+    from demseis.datasets import FaultSegDataset
+    from demseis.evaluation import score
+    from demseis.evaluation.train import predict_sections, train_unet
+
+    cuda = torch.cuda.is_available() if args.device is None else args.device.startswith("cuda")
+    steps = args.steps or (3000 if cuda else 300)
+    base = args.base or (32 if cuda else 16)
+    fr = (1.0 - args.test_fraction, 0.0, args.test_fraction)
+    t0 = time.perf_counter()
+    model, info = train_unet(args.store, steps=steps, crop=args.crop, batch=args.batch,
+                             base=base, lr=args.lr, seed=args.seed, threads=args.threads,
+                             device=args.device, split_fractions=fr, log=None)
+    out: dict = {"benchmark": "learnability", "store": args.store, "steps": info["steps"],
+                 "base": base, "crop": args.crop, "batch": args.batch, "seed": args.seed,
+                 "device": info["device"], "train_seconds": info["seconds"],
+                 "final_loss": round(info["final_loss"], 4), "pos_weight": info["pos_weight"]}
+    if info["device"] == "cpu":
+        out["cpu"] = platform.processor() or platform.machine()
+        out["threads"] = args.threads
+    rng = np.random.default_rng(args.seed)
+    for split in ("train", "test"):
+        ds = FaultSegDataset(args.store, inputs=("seismic",), targets=("fault",), split=split,
+                             split_fractions=fr)
+        idx = np.arange(len(ds))
+        if split == "train" and len(ds) > args.max_train_eval:
+            idx = np.sort(rng.choice(len(ds), args.max_train_eval, replace=False))
+        pairs = [ds[int(i)] for i in idx]
+        seis = np.stack([x[0].numpy() for x, _ in pairs])
+        truth = np.stack([(y.numpy() > 0) for _, y in pairs])
+        prob = predict_sections(model, seis, device=info["device"])
+        out[f"{split}_samples"] = len(idx)
+        out[f"{split}_runs"] = int(len(np.unique(ds.run_ids[idx])))
+        for tol in (2, 4):
+            r = score(prob, truth, threshold=0.5, tolerance_px=tol)
+            for k in ("precision", "recall", "f1", "ap"):
+                out[f"{split}_{k}_tol{tol}"] = round(float(getattr(r, k)), 4)
+    out["f1_gap_tol2"] = round(out["train_f1_tol2"] - out["test_f1_tol2"], 4)
+    out["seconds"] = round(time.perf_counter() - t0, 1)
+    print(json.dumps(out))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

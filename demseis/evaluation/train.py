@@ -1,0 +1,179 @@
+"""A small 2D U-Net trained on a demseis store: one training loop for the examples and benchmarks.
+
+Only the public API is used (:class:`demseis.datasets.FaultSegDataset`, PyTorch). PyTorch is
+imported inside the functions, so ``import demseis.evaluation`` stays light.
+
+::
+
+    from demseis.evaluation.train import train_unet, predict_sections
+    model, log = train_unet("quick.zarr", steps=300)             # train split, random crops
+    prob = predict_sections(model, sections)                      # (N, H, W) probabilities
+
+The model: a 3-level U-Net (``base``, 2 ``base``, 4 ``base`` channels; ~120k parameters at
+``base = 16``), each section standardised on the fly; loss = binary cross-entropy (positive
+weight = background / fault pixel ratio of the first batches, capped at 50) + soft Dice; Adam.
+Everything is seeded; on CPU results repeat for a fixed thread count.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+
+from demseis.errors import InputError
+
+
+def build_unet(base: int = 16):
+    """A 3-level 2D U-Net: (B, 1, H, W) seismic -> (B, 1, H, W) fault logits (H, W % 4 == 0)."""
+    import torch
+    from torch import nn
+
+    def block(cin: int, cout: int) -> nn.Sequential:
+        return nn.Sequential(
+            nn.Conv2d(cin, cout, 3, padding=1, bias=False), nn.BatchNorm2d(cout), nn.ReLU(True),
+            nn.Conv2d(cout, cout, 3, padding=1, bias=False), nn.BatchNorm2d(cout), nn.ReLU(True),
+        )
+
+    class UNet(nn.Module):
+        def __init__(self) -> None:
+            super().__init__()
+            self.enc1, self.enc2, self.mid = block(1, base), block(base, 2 * base), \
+                block(2 * base, 4 * base)
+            self.pool = nn.MaxPool2d(2)
+            self.up2 = nn.ConvTranspose2d(4 * base, 2 * base, 2, stride=2)
+            self.dec2 = block(4 * base, 2 * base)
+            self.up1 = nn.ConvTranspose2d(2 * base, base, 2, stride=2)
+            self.dec1 = block(2 * base, base)
+            self.head = nn.Conv2d(base, 1, 1)
+
+        def forward(self, x: torch.Tensor) -> torch.Tensor:
+            # amplitude scale differs between sections: standardise each one
+            x = (x - x.mean(dim=(2, 3), keepdim=True)) / (x.std(dim=(2, 3), keepdim=True) + 1e-6)
+            e1 = self.enc1(x)
+            e2 = self.enc2(self.pool(e1))
+            m = self.mid(self.pool(e2))
+            d2 = self.dec2(torch.cat([self.up2(m), e2], 1))
+            d1 = self.dec1(torch.cat([self.up1(d2), e1], 1))
+            return self.head(d1)
+
+    return UNet()
+
+
+def predict_sections(model, sections: np.ndarray, batch: int = 4,
+                     device: str | None = None) -> np.ndarray:
+    """Fault probabilities (N, H, W) float32 of seismic sections (N, H, W), padded to % 4."""
+    import torch
+
+    sections = np.asarray(sections)
+    if sections.ndim != 3:
+        raise InputError(f"sections must be (N, H, W), got shape {sections.shape}")
+    dev = torch.device(device) if device else next(model.parameters()).device
+    n, h, w = sections.shape
+    ph, pw = (-h) % 4, (-w) % 4
+    out = np.empty((n, h, w), np.float32)
+    model.eval()
+    with torch.no_grad():
+        for s in range(0, n, batch):
+            x = torch.from_numpy(np.ascontiguousarray(sections[s: s + batch], np.float32))[:, None]
+            x = torch.nn.functional.pad(x, (0, pw, 0, ph), mode="reflect").to(dev)
+            out[s: s + batch] = torch.sigmoid(model(x))[:, 0, :h, :w].float().cpu().numpy()
+    return out
+
+
+def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = None,
+               split: str = "train", target: str = "fault", crop: int = 96, batch: int = 8,
+               base: int = 16, lr: float = 2e-3, seed: int = 0, threads: int | None = None,
+               device: str | None = None, where: Mapping[str, Any] | Callable | None = None,
+               split_fractions: tuple[float, float, float] = (0.8, 0.1, 0.1),
+               log: Callable[[str], None] | None = print) -> tuple[Any, dict[str, Any]]:
+    """Train :func:`build_unet` on random crops of a store's ``split``.
+
+    Parameters
+    ----------
+    store : a store path (or what :class:`demseis.datasets.FaultSegDataset` accepts).
+    steps : optimiser steps (exactly this many), or
+    minutes : a wall-clock budget instead (the number of steps then depends on the machine).
+    split, where, split_fractions : which samples (see :class:`FaultSegDataset`).
+    target : label array learned (``"fault"``).
+    crop : square training crop (multiple of 4, at most the section's smaller side).
+    batch, base, lr, seed : batch size, U-Net base width, Adam learning rate, seed.
+    threads : torch CPU threads (None: leave torch's setting).
+    device : ``"cuda"``, ``"cpu"``... (None: CUDA when available).
+    log : called with progress lines (None: silent).
+
+    Returns
+    -------
+    (model, info) with info keys steps, epochs, seconds, final_loss, pos_weight, n_samples,
+    n_runs, device.
+    """
+    import torch
+    from torch.utils.data import DataLoader
+
+    from demseis.datasets import FaultSegDataset
+
+    if (steps is None) == (minutes is None):
+        raise InputError("train_unet: give exactly one of steps or minutes")
+    if steps is not None and steps < 1:
+        raise InputError(f"train_unet: steps = {steps}; allowed: >= 1")
+    torch.manual_seed(seed)
+    if threads:
+        torch.set_num_threads(int(threads))
+    dev = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
+    ds = FaultSegDataset(store, inputs=("seismic",), targets=(target,), split=split,
+                         crop=(crop, crop), seed=seed, where=where,
+                         split_fractions=split_fractions)
+    if len(ds) == 0:
+        raise InputError(f"the {split} split of the store is empty")
+    h, w = ds.layout.shape
+    if crop > min(h, w) or crop % 4:
+        raise InputError(f"crop = {crop}; allowed: a multiple of 4, at most {min(h, w)}")
+    gen = torch.Generator().manual_seed(seed)
+    loader = DataLoader(ds, batch_size=batch, shuffle=True, generator=gen, drop_last=False)
+    # fault pixels are rare: weight them by the background / fault ratio of a few batches
+    frac = np.mean([float((y > 0).float().mean()) for _, (_, y) in zip(range(8), loader)])
+    pos_weight = torch.tensor(min((1 - frac) / max(frac, 1e-6), 50.0), device=dev)
+    model = build_unet(base).to(dev)
+    opt = torch.optim.Adam(model.parameters(), lr=lr)
+    bce = torch.nn.BCEWithLogitsLoss(pos_weight=pos_weight)
+    t0, step, epoch, losses = time.perf_counter(), 0, 0, []
+    budget = None if minutes is None else 60.0 * float(minutes)
+
+    def done() -> bool:
+        return step >= steps if steps is not None else time.perf_counter() - t0 >= budget
+
+    if log:
+        log(f"train: {len(ds)} samples ({len(np.unique(ds.run_ids))} runs), crop {crop}, "
+            f"fault fraction {frac:.4f}, pos_weight {float(pos_weight):.1f}, device {dev}, "
+            + (f"{steps} steps" if steps is not None else f"budget {minutes:g} min"))
+    while not done():
+        ds.set_epoch(epoch)
+        model.train()
+        for x, y in loader:
+            x = x.to(dev)
+            y = (y > 0).float()[:, None].to(dev)
+            logits = model(x)
+            p = torch.sigmoid(logits)
+            dice = 1 - (2 * (p * y).sum() + 1) / (p.sum() + y.sum() + 1)
+            loss = bce(logits, y) + dice
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            losses.append(float(loss.detach()))
+            step += 1
+            if log and step % 50 == 0:
+                log(f"  step {step:5d}  epoch {epoch:3d}  loss {np.mean(losses[-50:]):.4f}  "
+                    f"{time.perf_counter() - t0:6.0f} s")
+            if done():
+                break
+        epoch += 1
+    info = {"steps": step, "epochs": epoch, "seconds": round(time.perf_counter() - t0, 1),
+            "final_loss": float(np.mean(losses[-50:])) if losses else float("nan"),
+            "pos_weight": round(float(pos_weight), 2), "n_samples": len(ds),
+            "n_runs": int(len(np.unique(ds.run_ids))), "device": str(dev)}
+    if log:
+        log(f"trained {step} steps ({epoch} epochs) in {info['seconds']:.0f} s, "
+            f"final loss {info['final_loss']:.4f}")
+    return model, info

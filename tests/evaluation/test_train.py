@@ -1,0 +1,58 @@
+"""demseis.evaluation.train: the shared U-Net training loop (fixed steps), prediction, errors;
+and benchmarks/learnability.py end to end on a tiny store."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("torch")
+
+from demseis.errors import InputError  # noqa: E402
+from demseis.evaluation.train import build_unet, predict_sections, train_unet  # noqa: E402
+from tests.evaluation.test_scoring_example import _tiny_store  # noqa: E402
+
+BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "learnability.py"
+
+
+def test_train_unet_fixed_steps_is_repeatable(tmp_path):
+    store = tmp_path / "tiny.zarr"
+    _tiny_store(store)
+    kw = dict(steps=3, crop=16, batch=4, base=4, threads=1, device="cpu", log=None)
+    m1, info = train_unet(store, **kw)
+    m2, _ = train_unet(store, **kw)
+    assert info["steps"] == 3 and info["device"] == "cpu" and info["n_runs"] >= 1
+    x = np.random.default_rng(0).normal(size=(2, 30, 30)).astype(np.float32)
+    p1, p2 = predict_sections(m1, x), predict_sections(m2, x)
+    assert p1.shape == (2, 30, 30) and 0 <= p1.min() and p1.max() <= 1
+    np.testing.assert_array_equal(p1, p2)  # same seed, same threads: same weights
+    with pytest.raises(InputError, match="exactly one of steps or minutes"):
+        train_unet(store, crop=16, log=None)
+    with pytest.raises(InputError, match="crop"):
+        train_unet(store, steps=1, crop=18, log=None)
+    with pytest.raises(InputError, match="sections must be"):
+        predict_sections(build_unet(4), x[0])
+
+
+def test_learnability_benchmark_prints_one_json_line(tmp_path, capsys):
+    store = tmp_path / "tiny.zarr"
+    _tiny_store(store)
+    spec = importlib.util.spec_from_file_location("learnability", BENCH)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    assert mod.main([str(store), "--steps", "2", "--crop", "16", "--batch", "4", "--base", "4",
+                     "--threads", "1", "--test-fraction", "0.4", "--device", "cpu"]) == 0
+    line = capsys.readouterr().out.strip().splitlines()
+    assert len(line) == 1
+    out = json.loads(line[0])
+    assert out["steps"] == 2 and out["device"] == "cpu"
+    for split in ("train", "test"):
+        for k in ("precision", "recall", "f1", "ap"):
+            for tol in (2, 4):
+                assert 0.0 <= out[f"{split}_{k}_tol{tol}"] <= 1.0 or np.isnan(
+                    out[f"{split}_{k}_tol{tol}"])
+    assert out["test_runs"] >= 1 and out["train_runs"] >= 1
