@@ -3,8 +3,8 @@ and benchmarks/learnability.py end to end on a tiny store."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
+import runpy
 from pathlib import Path
 
 import numpy as np
@@ -41,10 +41,8 @@ def test_train_unet_fixed_steps_is_repeatable(tmp_path):
 def test_learnability_benchmark_prints_one_json_line(tmp_path, capsys):
     store = tmp_path / "tiny.zarr"
     _tiny_store(store)
-    spec = importlib.util.spec_from_file_location("learnability", BENCH)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    assert mod.main([str(store), "--steps", "2", "--crop", "16", "--batch", "4", "--base", "4",
+    bench_main = runpy.run_path(str(BENCH))["main"]
+    assert bench_main([str(store), "--steps", "2", "--crop", "16", "--batch", "4", "--base", "4",
                      "--threads", "1", "--test-fraction", "0.4", "--device", "cpu"]) == 0
     line = capsys.readouterr().out.strip().splitlines()
     assert len(line) == 1
