@@ -182,22 +182,24 @@ def dip_masks(shape: tuple[int, int], row_step: float, col_step_m: float,
     """
     from scipy.fft import fftfreq, rfftfreq
 
-    fz = np.abs(fftfreq(shape[0], row_step))[:, None]
-    kx = np.abs(rfftfreq(shape[1], col_step_m))[None, :]
+    fz = np.abs(fftfreq(shape[0], row_step)).astype(np.float32)[:, None]
+    kx = np.abs(rfftfreq(shape[1], col_step_m)).astype(np.float32)[None, :]
+    # tan(phi) = |k_x| / (s |f_z|): the ratio is formed once, each node compares it with its
+    # edges scaled by s; arctan and cosine only inside the taper
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = kx / fz
+    ratio[0, 0] = 0.0                                     # DC: flat
     out = np.empty((len(angles_deg), shape[0], shape[1] // 2 + 1), dtype=np.float32)
     for k, (ang, s) in enumerate(zip(angles_deg, kz_per_row_freq)):
         if ang >= 90.0:
             out[k] = 1.0
             continue
-        # compare tan(phi) = |k_x| / |k_z| with the edges; arctan only inside the taper
-        with np.errstate(divide="ignore", invalid="ignore"):
-            tan_phi = kx / (s * fz)
-        tan_phi[0, 0] = 0.0                               # DC: flat
         theta = math.radians(ang)
-        lo = math.tan(theta - min(math.radians(taper_deg), theta))
-        band = (tan_phi > lo) & (tan_phi < math.tan(theta))
-        out[k] = tan_phi <= lo
-        out[k][band] = dip_weight(np.arctan(tan_phi[band]), float(ang), taper_deg)
+        lo = s * math.tan(theta - min(math.radians(taper_deg), theta))
+        out[k] = ratio <= lo
+        band = np.flatnonzero((ratio > lo) & (ratio < s * math.tan(theta)))
+        rows, cols = np.divmod(band, ratio.shape[1])
+        out[k][rows, cols] = dip_weight(np.arctan(ratio[rows, cols] / s), float(ang), taper_deg)
     return out
 
 
