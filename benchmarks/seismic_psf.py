@@ -22,9 +22,9 @@ import time
 
 import numpy as np
 
-from demseis.seismic.demo import faulted_sequence
+from demseis.testing import faulted_sequence
 from demseis.seismic.forward import synthetic_sections, time_axis
-from demseis.seismic.grid import Grid
+from demseis.types import Grid
 from demseis.seismic.properties import (PropertyModel, draw_layer_properties, element_properties,
                                         property_grids)
 from demseis.seismic.psf import psf_sections

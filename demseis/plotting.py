@@ -216,6 +216,11 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     p = {k: root["params"][k][index] for k in ("run_id", "snapshot", "dip_deg", "throw_m", "freq_hz",
                                                "snr_db", "noise_kind")}
     noise = codes.get("noise_kind", ["white", "band"])[int(p["noise_kind"])]
+    imaging = ""
+    if "imaging" in root["params"]:       # stores written before the PSF option have only 1-D
+        kind = codes.get("imaging", ["1d", "psf"])[int(root["params"]["imaging"][index])]
+        imaging = ", 1-D" if kind == "1d" else (
+            f", PSF {float(root['params']['psf_max_angle_deg'][index]):g}°")
     w_m = grid["nx"] * grid["cell_m"]
     h_m = grid["nz"] * grid["cell_m"]
     extent = (0, w_m / 1000, h_m / 1000, 0)
@@ -224,7 +229,8 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
 
     fig, axes = plt.subplots(1, 3, figsize=(16, 1.3 + 16 / 3 * h_m / w_m), sharey=True, layout="constrained")
     axes[0].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect="equal")
-    axes[0].set_title(f"seismic: {float(p['freq_hz']):g} Hz, SNR {float(p['snr_db']):g} dB ({noise})")
+    axes[0].set_title(f"seismic: {float(p['freq_hz']):g} Hz, SNR {float(p['snr_db']):g} dB "
+                      f"({noise}){imaging}")
     axes[1].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect="equal")
     axes[1].imshow(np.ma.masked_equal(fault, 0), cmap=ListedColormap(["red"]), extent=extent,
                    aspect="equal", interpolation="nearest")

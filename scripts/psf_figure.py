@@ -7,7 +7,7 @@ Usage::
         --out docs/figures/seismic_psf.png
 
 Without ``--store`` the last snapshot of the kinematic toy sequence of
-:mod:`demseis.seismic.demo` is drawn (the title says which). Top row: the section at
+:mod:`demseis.testing` is drawn (the title says which). Top row: the section at
 ``--freq`` Hz (depth domain, no noise) in 1-D and with the PSF at the two ``--angles``;
 bottom row: the image of one point scatterer (a single non-zero reflection coefficient) by
 each, i.e. the point-spread function itself (each panel scaled to its own peak, the peak
@@ -21,20 +21,20 @@ from pathlib import Path
 
 import numpy as np
 
-from demseis.seismic import (Grid, PropertyModel, draw_layer_properties, element_properties,
-                             property_grids)
-from demseis.seismic.psf import imaged_sections
+from demseis.seismic import (PropertyModel, draw_layer_properties, element_properties,
+                             imaged_sections, property_grids)
+from demseis.types import Grid
 
 
 def _snapshots(store: str | None, run: int, cell_m: float):
     """(snapshots, grid, source) of a store's run (its sweep's grid) or of the toy sequence."""
     if store is None:
-        from demseis.seismic.demo import faulted_sequence
+        from demseis.testing import faulted_sequence
 
         snaps = faulted_sequence(2500.0, 1100.0, n_layers=24, throw_m=300.0,
                                  rng=np.random.default_rng(0))
         return (snaps, Grid.covering(2500.0, 1100.0, cell_m),
-                "kinematic toy fault (demseis.seismic.demo), not DEM")
+                "kinematic toy fault (demseis.testing), not DEM")
     from demseis.datasets import open_store, read_particles
     from demseis.generator.config import parse_config
 

@@ -33,6 +33,12 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.add_argument("--freq", required=True, help="comma-separated Ricker frequencies in Hz, e.g. 20,40,60")
     p.add_argument("--snr", default="inf", help="comma-separated SNRs in dB (inf = no noise), default inf")
     p.add_argument("--noise", default="white", choices=("white", "band"), help="noise kind")
+    p.add_argument("--imaging", help="comma-separated imaging: 1d, psf (2-D dip-limited PSF), or "
+                                     "both; default: the source store's")
+    p.add_argument("--psf-max-angle", help="comma-separated maximum illumination angles of the PSF "
+                                           "in degrees, e.g. 20,45; default: the source store's")
+    p.add_argument("--psf-aperture", help="survey half-aperture of the PSF in m (0 = no limit: "
+                                          "constant angle); default: the source store's")
     p.add_argument("--out", required=True, help="new store path")
     p.add_argument("--overwrite", action="store_true", help="replace --out if it is a demseis store")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -73,7 +79,22 @@ def cmd_render(args: argparse.Namespace) -> int:
 
     freqs = _float_list(args.freq, "--freq")
     snrs = _float_list(args.snr, "--snr")
+    imaging = None
+    if args.imaging is not None:
+        imaging = [part.strip() for part in args.imaging.split(",")]
+        bad = [m for m in imaging if m not in ("1d", "psf")]
+        if bad:
+            raise InputError(f"--imaging {args.imaging!r}: {bad[0]!r} is not one of '1d', 'psf'")
+    angles = None if args.psf_max_angle is None else _float_list(args.psf_max_angle,
+                                                                  "--psf-max-angle")
+    aperture = None
+    if args.psf_aperture is not None:
+        vals = _float_list(args.psf_aperture, "--psf-aperture")
+        if len(vals) != 1:
+            raise InputError(f"--psf-aperture {args.psf_aperture!r}: give one value in m")
+        aperture = vals[0]
     summary = rerender(args.store, args.out, freqs_hz=freqs, snrs_db=snrs, noise_kind=args.noise,
+                       imaging=imaging, psf_max_angles_deg=angles, psf_aperture_m=aperture,
                        overwrite=args.overwrite, progress=not args.quiet)
     print("\n".join(summary.lines()))
     return 1 if summary.failed else 0

@@ -82,6 +82,12 @@ _BASE_PARAMS: tuple[ParamDef, ...] = (
              doc="signal-to-noise ratio in dB, 20 log10(rms signal / rms noise); inf = no noise"),
     ParamDef("noise_kind", str, "render", "white", choices=("white", "band"),
              doc="white or band-limited noise"),
+    ParamDef("imaging", str, "render", "1d", choices=("1d", "psf"),
+             doc="1-D convolution, or the 2-D dip-limited point-spread function (docs/seismic.md)"),
+    ParamDef("psf_max_angle_deg", float, "render", 30.0, 1.0, 90.0,
+             doc="maximum illumination angle of the PSF (degrees; 90 = no dip limit)"),
+    ParamDef("psf_aperture_m", float, "render", 0.0, 0.0, 1.0e6,
+             doc="survey half-aperture L of the PSF: angle <= arctan(L / depth) (m); 0 = no limit"),
 )
 
 _MATERIAL_FIELDS = {

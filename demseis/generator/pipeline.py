@@ -7,6 +7,7 @@ frequencies and noise levels without re-running the DEM.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -16,7 +17,7 @@ import numpy as np
 from demseis.dem.types import Material, NormalFault
 from demseis.types import Snapshot
 from demseis.generator.config import _MATERIAL_FIELDS, Config, _property_params, all_params
-from demseis.generator.sampling import RunSpec, plan_run, rng_at, seed_sequence
+from demseis.generator.sampling import Render, RunSpec, plan_run, rng_at, seed_sequence
 from demseis.types import Grid
 
 #: integer codes of string parameters in the store (``params/<name>`` holds the index)
@@ -24,6 +25,7 @@ PARAM_CODES: dict[str, tuple[str, ...]] = {
     "noise_kind": ("white", "band"),
     "dip_direction": ("right", "left"),
     "contact_model": ("frictional", "bonded"),
+    "imaging": ("1d", "psf"),
 }
 
 SAMPLE_ARRAYS: dict[str, str] = {
@@ -192,8 +194,8 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
         depth_to_time,
         draw_layer_properties,
         element_properties,
+        imaged_sections,
         property_grids,
-        synthetic_sections,
     )
 
     grid = grid_of(cfg)
@@ -219,18 +221,25 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
         vp_e, rho_e = element_properties(snap.ids, snap.layer, layer_props, model, elem_seed)
         vp_g, rho_g = property_grids(snap.xy, snap.radius, vp_e, rho_e, snap.layer, grid, model)
         maps = dict(label_maps(snap, history[k], grid, cfg.labels))
-        freqs = sorted({r.freq_hz for r in renders})
         impedance = vp_g * rho_g
-        if t_s is None:
-            sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs)
-        else:
-            sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs, domain="time", t_s=t_s)
+        domain = "depth" if t_s is None else "time"
+        # one imaging call per (imaging, angle, aperture), all its frequencies at once
+        wanted: dict[tuple[str, float, float], set[float]] = {}
+        for r in renders:
+            wanted.setdefault(_imaging_key(r), set()).add(r.freq_hz)
+        images = {}
+        for key, fset in wanted.items():
+            freqs = sorted(fset)
+            secs = imaged_sections(key[0], vp_g, rho_g, grid.cell_m, freqs, domain, t_s=t_s,
+                                   max_angle_deg=key[1], aperture_m=key[2])
+            images.update({(key, f): sec for f, sec in zip(freqs, secs)})
+        if t_s is not None:
             fills = {"fault": 0, "damage": 0, "strain": 0.0, "layer": -1}
             for name, fill in fills.items():
                 maps[name] = depth_to_time(maps[name], vp_g, grid.cell_m, t_s, method="nearest", fill=fill)
             impedance = depth_to_time(impedance, vp_g, grid.cell_m, t_s, method="nearest", fill=0.0)
         for r in renders:
-            clean = sections[freqs.index(r.freq_hz)]
+            clean = images[(_imaging_key(r), r.freq_hz)]
             noisy = add_noise(clean, r.snr_db, r.noise_kind, np.random.default_rng(r.seed))
             i = r.sample
             arrays["seismic"][i] = noisy
@@ -243,13 +252,22 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
             row = {
                 "run_id": spec.run, "sample_in_run": i, "snapshot": k, "step": snap.step,
                 "throw_m": snap.throw_m, "n_elements": snap.n, "freq_hz": r.freq_hz,
-                "snr_db": r.snr_db, "noise_seed": r.seed, "noise_kind": r.noise_kind, **info,
+                "snr_db": r.snr_db, "noise_seed": r.seed, "noise_kind": r.noise_kind,
+                "imaging": r.imaging, "psf_max_angle_deg": r.psf_max_angle_deg,
+                "psf_aperture_m": r.psf_aperture_m, **info,
             }
             for key, value in {**p, **row}.items():
                 if key in PARAM_CODES:
                     value = PARAM_CODES[key].index(value)
                 params[key][i] = value
     return ShardData(arrays=arrays, params=params, snapshots=snapshots)
+
+
+def _imaging_key(r: Render) -> tuple[str, float, float]:
+    """Renders sharing this key share one imaging call (the angle matters only for the PSF)."""
+    if r.imaging == "1d":
+        return ("1d", 90.0, math.inf)
+    return (r.imaging, r.psf_max_angle_deg, r.psf_aperture_m if r.psf_aperture_m > 0 else math.inf)
 
 
 def run_shard(cfg: Config, run: int, progress: Callable[[float], None] | None = None) -> ShardData:

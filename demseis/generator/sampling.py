@@ -42,6 +42,9 @@ class Render:
     snr_db: float
     noise_kind: str
     seed: int  # 64-bit seed of the noise Generator
+    imaging: str = "1d"  # "1d" or "psf" (demseis.seismic.psf)
+    psf_max_angle_deg: float = 30.0
+    psf_aperture_m: float = 0.0  # 0 = no aperture limit
 
 
 @dataclass(frozen=True)
@@ -86,7 +89,10 @@ def plan_run(cfg: Config, run: int) -> RunSpec:
                 ss = seed_sequence(cfg, run, 3, sample)
                 rng = np.random.default_rng(ss)
                 vals = {}
-                for key in ("freq_hz", "snr_db", "noise_kind"):
+                # drawn in this order; keys added later come last so that older configs
+                # draw the same values
+                for key in ("freq_hz", "snr_db", "noise_kind", "imaging", "psf_max_angle_deg",
+                            "psf_aperture_m"):
                     spec = combo[key]
                     if isinstance(spec, Fixed):
                         vals[key] = spec.value
@@ -99,6 +105,8 @@ def plan_run(cfg: Config, run: int) -> RunSpec:
                 noise_seed = int(ss.generate_state(2, dtype=np.uint64)[1])
                 renders.append(Render(sample=sample, snapshot=snap, freq_hz=float(vals["freq_hz"]),
                                       snr_db=float(vals["snr_db"]), noise_kind=str(vals["noise_kind"]),
-                                      seed=noise_seed))
+                                      seed=noise_seed, imaging=str(vals["imaging"]),
+                                      psf_max_angle_deg=float(vals["psf_max_angle_deg"]),
+                                      psf_aperture_m=float(vals["psf_aperture_m"])))
                 sample += 1
     return RunSpec(run=run, params=run_params(cfg, run), renders=tuple(renders))
