@@ -60,6 +60,10 @@ def run(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: int = 21,
         cases[f"snapshot_depth_1d_{tag}"] = lambda fr=fr: synthetic_sections(*grids(), cell_m, fr)
         cases[f"snapshot_depth_psf_{tag}"] = lambda fr=fr: psf_sections(
             *grids(), cell_m, fr, angle_deg)
+        cases[f"snapshot_time_1d_{tag}"] = lambda fr=fr: synthetic_sections(
+            *grids(), cell_m, fr, "time", t_s=t_s)
+        cases[f"snapshot_time_psf_{tag}"] = lambda fr=fr: psf_sections(
+            *grids(), cell_m, fr, angle_deg, "time", t_s=t_s)
     for fn in cases.values():            # warm-up: Numba cache load, FFT plans
         fn()
     wall: dict[str, list[float]] = {k: [] for k in cases}
