@@ -68,7 +68,7 @@ def main() -> None:
 
     # a point scatterer: one cell of higher impedance in a constant medium (its top and
     # bottom make a +R / -R pair, the image of a thin bed at a point)
-    n = 41
+    n, show = 201, 41                     # a large grid, its central 41 x 41 cells shown
     vp_p = np.full((n, n), 3000.0)
     rho_p = np.full((n, n), 2300.0)
     rho_p[n // 2, n // 2] *= 1.2
@@ -79,12 +79,13 @@ def main() -> None:
                              gridspec_kw={"height_ratios": [grid.nz / grid.nx * 3.0, 1.2]})
     sec = [imaged_sections(kind, vp_g, rho_g, grid.cell_m, [a.freq], max_angle_deg=ang)[0]
            for _, kind, ang in cases]
+    c0 = (n - show) // 2
     pt = [imaged_sections(kind, vp_p, rho_p, a.cell_m, [a.freq], max_angle_deg=ang)[0]
-          for _, kind, ang in cases]
+          [c0:c0 + show, c0:c0 + show] for _, kind, ang in cases]
     clip = float(np.percentile(np.abs(sec[0]), 99.5))
     clip_p = float(np.abs(pt[0]).max())
     ext = [0.0, grid.nx * grid.cell_m / 1e3, grid.nz * grid.cell_m / 1e3, 0.0]
-    half = n * a.cell_m / 2.0
+    half = show * a.cell_m / 2.0
     for j, (title, _, _) in enumerate(cases):
         ax = axes[0, j]
         ax.imshow(sec[j], cmap="gray_r", vmin=-clip, vmax=clip, extent=ext, aspect="equal",
