@@ -9,7 +9,8 @@ Usage::
 Without ``--store`` the last snapshot of the kinematic toy sequence of
 :mod:`demseis.testing` is drawn (the title says which). Top row: the section at
 ``--freq`` Hz (depth domain, no noise) in 1-D and with the PSF at the two ``--angles``;
-bottom row: the image of one point scatterer (a single non-zero reflection coefficient) by
+bottom row: the image of one point scatterer (one cell of 20 % higher density in a constant
+medium: a +R / -R pair of reflection coefficients) by
 each, i.e. the point-spread function itself (each panel scaled to its own peak, the peak
 relative to the 1-D one written in it).
 """
