@@ -193,9 +193,10 @@ def store_summary(path: str | Path) -> list[str]:
         vals = vals[done]
         if vals.size == 0:
             continue
-        if name in codes:
-            uniq = sorted({codes[name][int(v)] for v in vals})
-            lines.append(f"  {name:22s} {', '.join(uniq)}")
+        if name in codes:                # names with their sample counts, e.g. imaging 1d (6), psf (6)
+            codes_used, counts = np.unique(vals.astype(np.int64), return_counts=True)
+            shown = ", ".join(f"{codes[name][int(c)]} ({int(k)})" for c, k in zip(codes_used, counts))
+            lines.append(f"  {name:22s} {shown}")
             continue
         uniq = np.unique(vals)
         if uniq.size <= 6:

@@ -277,7 +277,8 @@ def dip_filter(sections: np.ndarray, plan: PsfPlan) -> np.ndarray:
         np.multiply(spec, masks[k], out=buf)
         tmp = ifft(buf, axis=-2, overwrite_x=True)
         acc[..., r0:r1, :] += weights[k, r0:r1, None] * tmp[..., r0:r1, :]
-    out[..., :n_keep, :] = irfft(acc, n=shape[1], axis=-1)[..., plan.pad_cols:plan.pad_cols + n_cols]
+    cols = slice(plan.pad_cols, plan.pad_cols + n_cols)
+    out[..., :n_keep, :] = irfft(acc, n=shape[1], axis=-1)[..., cols]
     return out
 
 
@@ -303,6 +304,8 @@ def _time_profile(vp: np.ndarray, cell_m: float, t_s: np.ndarray) -> tuple[np.nd
     safe = np.where(valid, idx, 0)
     v_sum = np.where(valid, vp[safe, np.arange(vp.shape[1])[:, None]], 0.0).sum(axis=0)
     z_sum = np.where(valid, (safe + 0.5) * cell_m, 0.0).sum(axis=0)
+    if not n.any():                      # no time inside any column (t_s all < 0)
+        return np.full(t_s.size, vp.mean()), np.zeros(t_s.size)
     last = int(np.flatnonzero(n)[-1])
     n_held = np.maximum(n, 1)
     v_mean, z_mean = v_sum / n_held, z_sum / n_held

@@ -70,7 +70,7 @@ def test_the_1d_samples_are_the_default_render(both_store, tmp_path):
 def test_info_shows_the_imaging(both_store, capsys):
     assert main(["info", str(both_store)]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert any(ln.split() == ["imaging", "1d,", "psf"] for ln in lines)
+    assert any(ln.split() == ["imaging", "1d", "(6),", "psf", "(6)"] for ln in lines)
     assert any(ln.split() == ["psf_max_angle_deg", "25"] for ln in lines)
 
 
