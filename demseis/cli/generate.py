@@ -48,8 +48,9 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
+    from demseis.api import generate
     from demseis.generator.config import load_config
-    from demseis.generator.sweep import dry_run_plan, run_sweep
+    from demseis.generator.sweep import dry_run_plan
 
     cfg = load_config(args.config, preset=args.preset)
     if args.dry_run:
@@ -57,10 +58,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
         return 0
     if args.workers is not None and args.scheduler is not None:
         raise InputError("give either --workers or --scheduler, not both")
-    summary = run_sweep(cfg, args.out, workers=args.workers, scheduler=args.scheduler,
-                        overwrite=args.overwrite, progress=not args.quiet)
-    print("\n".join(summary.lines()))
-    return 1 if summary.failed else 0
+    store = generate(cfg, out=args.out, workers=args.workers, scheduler=args.scheduler,
+                     overwrite=args.overwrite, progress=not args.quiet)
+    print("\n".join(store.run_summary.lines()))
+    return 1 if store.run_summary.failed else 0
 
 
 def _float_list(text: str, name: str) -> list[float]:
