@@ -43,3 +43,14 @@ def test_tour_commands_exist():
     tour = next(b for b in _blocks("bash") if "Five" in b or "demseis info" in b)
     used = {line.split()[1] for line in tour.splitlines() if line.startswith("demseis ")}
     assert used <= commands, used - commands
+
+
+def test_python_api_snippet_runs(tmp_path, monkeypatch, capsys):
+    (code,) = [b for b in _blocks("python") if "demseis.generate(" in b]
+    monkeypatch.chdir(tmp_path)
+    scope: dict = {}
+    exec(compile(code, "README.md", "exec"), scope)
+    out = capsys.readouterr().out
+    assert "<demseis.Store 'tiny.zarr'" in out and "snr_db" in out
+    assert scope["sample"]["seismic"].shape == scope["store"].layout.shape
+    assert scope["result"].overall.n_samples == len(scope["store"])
