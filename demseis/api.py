@@ -85,10 +85,7 @@ class Store:
         """(N,) bool: the samples whose shard is complete."""
         from demseis.datasets.read import done_samples
 
-        try:
-            return done_samples(self._root, len(self), self.path)
-        except StoreError:  # no shard complete yet
-            return np.zeros(len(self), bool)
+        return done_samples(self._root, len(self), self.path, require_any=False)
 
     @property
     def params(self) -> dict[str, np.ndarray]:

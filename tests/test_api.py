@@ -13,18 +13,25 @@ from demseis.errors import ConfigError, InputError, StoreError
 
 
 @pytest.fixture(scope="module")
-def tiny(tmp_path_factory):
-    out = tmp_path_factory.mktemp("api") / "t.zarr"
-    return demseis.generate("tiny", out=out, workers=0)
+def tiny(tiny_store):
+    """The session's tiny store (made by demseis.generate), opened again."""
+    return demseis.open(tiny_store)
 
 
 def test_generate_returns_a_store(tiny):
-    assert isinstance(tiny, demseis.Store)
-    assert tiny.run_summary is not None and not tiny.run_summary.failed
+    assert isinstance(tiny, demseis.Store) and tiny.run_summary is None  # opened, not generated
     assert len(tiny) == 12 and tiny.done.all()
     text = repr(tiny)
     assert "12 samples (12 done)" in text and "seismic" in text and "10.0 m cells" in text
     assert "parameters (over done samples):" in tiny.summary()
+
+
+def test_generate_on_a_complete_store_resumes_nothing(tiny_store):
+    again = demseis.generate("tiny", out=tiny_store, workers=0)
+    assert isinstance(again, demseis.Store) and again.path == tiny_store
+    assert not again.run_summary.failed and again.done.all()
+    assert again.run_summary.completed == [] or not again.run_summary.completed  # nothing to do
+    assert again.run_summary.done_before == 2
 
 
 def test_params_table_and_sample(tiny):

@@ -54,59 +54,27 @@ def _default(name: str) -> Any:
     return PARAMS[name].default
 
 
-@dataclass(frozen=True)
-class ModelSection:
-    """The DEM box and run control; fixed for a whole sweep.
-
-    Attributes
-    ----------
-    width_m, height_m : model box (m).
-    radius_min_m, radius_max_m : element radii (m), drawn log-uniformly.
-    n_snapshots : snapshots per run, equally spaced in throw, the first the undeformed reference.
-    sedimentation : fill hanging-wall accommodation with growth layers.
-    wall_speed_m_s : speed of the moving basement along dip (m/s of model time).
-    """
-
-    width_m: float = _default("width_m")
-    height_m: float = _default("height_m")
-    radius_min_m: float = _default("radius_min_m")
-    radius_max_m: float = _default("radius_max_m")
-    n_snapshots: int = _default("n_snapshots")
-    sedimentation: bool = _default("sedimentation")
-    wall_speed_m_s: float = _default("wall_speed_m_s")
+def _section_class(table: str, cls_name: str, doc: str) -> type:
+    """A frozen dataclass with one field per declared key of ``[table]`` (type and default from
+    :mod:`demseis.parameters`; ``demseis params`` documents each field)."""
+    spec = [(k, p.kind, field(default=p.default)) for k, p in _section(table).items()]
+    cls = dataclasses.make_dataclass(cls_name, spec, frozen=True)
+    cls.__module__ = __name__  # pickles by reference (configs travel to the dask workers)
+    cls.__doc__ = doc
+    return cls
 
 
+ModelSection = _section_class("model", "ModelSection", """The DEM box and run control; fixed for a
+whole sweep: ``width_m``, ``height_m``, ``radius_min_m``, ``radius_max_m``, ``n_snapshots``,
+``sedimentation``, ``wall_speed_m_s``.""")
+GridSection = _section_class("grid", "GridSection", """The raster grid (``cell_m``); fixed for a
+sweep because every sample shares one (H, W) shape.""")
+OutputSection = _section_class("output", "OutputSection", """Optional arrays and the output domain:
+``impedance`` (also store the smoothed impedance grid), ``domain`` (``"depth"``: sections
+convolved in two-way time and mapped back to depth cells; ``"time"``: sections and every label
+on a two-way-time axis of ``dt_s`` samples, long enough for the slowest possible column).""")
 _MODEL_DEFS = _section("model")
-
-
-@dataclass(frozen=True)
-class GridSection:
-    """Raster grid; fixed for a sweep because every sample shares one (H, W) shape."""
-
-    cell_m: float = _default("cell_m")
-
-
 _GRID_DEFS = _section("grid")
-
-
-@dataclass(frozen=True)
-class OutputSection:
-    """Optional arrays and the output domain.
-
-    Attributes
-    ----------
-    impedance : also store the smoothed impedance grid (float32).
-    domain : ``"depth"`` (sections convolved in two-way time and mapped back to depth, so the
-        arrays are (H, W) cells of the grid) or ``"time"`` (sections and every label array on a
-        two-way-time axis of ``dt_s`` samples, long enough for the slowest possible column).
-    dt_s : time-domain sample interval (s).
-    """
-
-    impedance: bool = _default("impedance")
-    domain: str = _default("domain")
-    dt_s: float = _default("dt_s")
-
-
 _OUTPUT_DEFS = _section("output")
 
 
