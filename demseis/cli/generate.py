@@ -90,10 +90,14 @@ def cmd_render(args: argparse.Namespace) -> int:
     snrs = _float_list(args.snr, "--snr")
     imaging = None
     if args.imaging is not None:
+        from demseis.parameters import PARAMS
+
+        allowed = PARAMS["imaging"].choices
         imaging = [part.strip() for part in args.imaging.split(",")]
-        bad = [m for m in imaging if m not in ("1d", "psf")]
+        bad = [m for m in imaging if m not in allowed]
         if bad:
-            raise InputError(f"--imaging {args.imaging!r}: {bad[0]!r} is not one of '1d', 'psf'")
+            raise InputError(f"--imaging {args.imaging!r}: {bad[0]!r} is not one of "
+                             + ", ".join(repr(c) for c in allowed))
     angles = None if args.psf_max_angle is None else _float_list(args.psf_max_angle,
                                                                   "--psf-max-angle")
     aperture = None
