@@ -168,7 +168,7 @@ def test_open_store_other_schema_version(tmp_path):
     meta = json.loads((path / "zarr.json").read_text())
     meta["attributes"]["demseis"]["schema_version"] = 99
     (path / "zarr.json").write_text(json.dumps(meta))
-    with pytest.raises(StoreError, match=r"schema version 99 but this demseis .* reads schema version 1"):
+    with pytest.raises(StoreError, match=r"schema version 99 but this demseis .* reads schema version 2"):
         open_store(path)
 
 
