@@ -884,6 +884,9 @@ def write_shard(
     done[k] = 0
     sel = layout.shard_slice(k)
     for name in layout.arrays:
+        # zarr merges a write into an existing shard file (it reads its index first), so a
+        # damaged old shard would make the rewrite fail: remove it, the shard is not done
+        (Path(path) / name / "c" / str(k) / "0" / "0").unlink(missing_ok=True)
         _write_array(group[name], sel, data[name])
     for name in layout.params:
         _write_array(group["params"][name], sel, pdata[name])
