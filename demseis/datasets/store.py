@@ -109,9 +109,9 @@ many-fold and are stored with Blosc-lz4.
 
 PARTICLE_FIELDS: dict[str, tuple[str, str, str, str]] = {
     "ids": ("int64", "element", "1", "element id (stable across the snapshots of a run)"),
-    "x": ("float64", "element", "m", "element centre x"),
-    "y": ("float64", "element", "m", "element centre elevation"),
-    "radius": ("float64", "element", "m", "element radius"),
+    "x_m": ("float64", "element", "m", "element centre x"),
+    "y_m": ("float64", "element", "m", "element centre elevation"),
+    "radius_m": ("float64", "element", "m", "element radius"),
     "layer": ("int16", "element", "1", "layer index (growth layers >= n_layers)"),
     "deposited": ("bool", "element", "1", "added by syn-tectonic sedimentation"),
     "offsets": ("int64", "snapshot_edge", "1",
@@ -121,7 +121,8 @@ PARTICLE_FIELDS: dict[str, tuple[str, str, str, str]] = {
     "throw_m": ("float64", "snapshot", "m", "basement throw at the snapshot"),
 }
 """Arrays of one ``particles/run_<id>`` group: dtype, dimension, units, long_name (the first six
-are concatenated over snapshots)."""
+are concatenated over snapshots). Units in the names, and no name equal to a coordinate of
+the root group: xarray's DataTree would shadow it with the inherited coordinate."""
 
 COORDS: dict[str, tuple[str, str]] = {
     "depth": ("m", "depth below the model top (cell centres)"),
@@ -737,9 +738,9 @@ def write_particles(path: str | Path, run_id: int, snapshots: Sequence[Snapshot]
     counts = np.array([sn.ids.shape[0] for sn in snaps], dtype=np.int64)
     data = {
         "ids": np.concatenate([np.asarray(sn.ids) for sn in snaps]),
-        "x": np.concatenate([np.asarray(sn.xy)[:, 0] for sn in snaps]),
-        "y": np.concatenate([np.asarray(sn.xy)[:, 1] for sn in snaps]),
-        "radius": np.concatenate([np.asarray(sn.radius) for sn in snaps]),
+        "x_m": np.concatenate([np.asarray(sn.xy)[:, 0] for sn in snaps]),
+        "y_m": np.concatenate([np.asarray(sn.xy)[:, 1] for sn in snaps]),
+        "radius_m": np.concatenate([np.asarray(sn.radius) for sn in snaps]),
         "layer": np.concatenate([np.asarray(sn.layer) for sn in snaps]),
         "deposited": np.concatenate([np.asarray(sn.deposited) for sn in snaps]),
         "offsets": np.concatenate([[0], np.cumsum(counts)]),
@@ -804,8 +805,8 @@ def read_particles(path: str | Path, run_id: int) -> list[Snapshot]:
                 step=int(d["step"][k]),
                 throw_m=float(d["throw_m"][k]),
                 ids=d["ids"][s].copy(),
-                xy=np.stack([d["x"][s], d["y"][s]], axis=1),
-                radius=d["radius"][s].copy(),
+                xy=np.stack([d["x_m"][s], d["y_m"][s]], axis=1),
+                radius=d["radius_m"][s].copy(),
                 layer=d["layer"][s].copy(),
                 deposited=d["deposited"][s].copy(),
             )

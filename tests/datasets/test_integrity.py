@@ -90,7 +90,7 @@ def _flip_param(path):
 
 
 def _flip_particles(path):
-    f = path / "particles" / "run_00002" / "x" / "c" / "0"
+    f = path / "particles" / "run_00002" / "x_m" / "c" / "0"
     _flip(f, f.stat().st_size // 2)
 
 
@@ -104,7 +104,7 @@ CASES = {
     "seismic-index": (_flip_seismic_index,
                       "shard 2: seismic is damaged in samples 12..17 (index crc32c mismatch"),
     "params": (_flip_param, "shard 2: parameter freq_hz is damaged in samples 12..17"),
-    "particles": (_flip_particles, "shard 2: particles of run 2 are damaged: x (crc32c mismatch)"),
+    "particles": (_flip_particles, "shard 2: particles of run 2 are damaged: x_m (crc32c mismatch)"),
     "done-flag": (_flip_done, "shard 2: done flag is damaged (crc32c mismatch)"),
 }
 
