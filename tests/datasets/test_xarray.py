@@ -11,7 +11,7 @@ import pytest
 xr = pytest.importorskip("xarray")
 
 from demseis.datasets import ParamSpec, to_xarray  # noqa: E402
-from demseis.errors import DemseisError, StoreError  # noqa: E402
+from demseis.errors import DemseisError  # noqa: E402
 from tests.datasets._helpers import PARAMS, make_store  # noqa: E402
 
 
@@ -110,14 +110,3 @@ def test_missing_xarray_names_the_extra(tmp_path, monkeypatch):
     with pytest.raises(DemseisError, match=r"pip install 'demseis\[xarray\]'"):
         to_xarray(path)
 
-
-def test_old_schema_is_refused_naming_both_versions(tmp_path):
-    import json
-
-    path = make_store(tmp_path / "s.zarr", n_shards=1, s=1, shape=(2, 2))
-    meta = json.loads((path / "zarr.json").read_text())
-    meta["attributes"]["demseis"]["schema_version"] = 1
-    (path / "zarr.json").write_text(json.dumps(meta))
-    with pytest.raises(StoreError, match=r"schema version 1 but this demseis .* reads schema "
-                                         r"version 2; it was written by an older demseis"):
-        to_xarray(path)
