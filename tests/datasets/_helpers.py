@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 
 import numpy as np
@@ -67,3 +68,9 @@ def make_store(path: Path, n_shards: int = 4, s: int = 6, shape=(24, 32), write=
         d, p, parts = shard_data(k, s, shape, arrays, params, seed=seed)
         write_shard(path, k, d, p, parts)
     return path
+
+
+def digest(path: Path) -> dict[str, str]:
+    """sha256 of every file of a store, by relative path (byte-identity of two stores)."""
+    return {str(f.relative_to(path)): hashlib.sha256(f.read_bytes()).hexdigest()
+            for f in sorted(path.rglob("*")) if f.is_file()}

@@ -4,7 +4,6 @@ byte-identical to an uninterrupted run."""
 
 from __future__ import annotations
 
-import hashlib
 import os
 import shutil
 import signal
@@ -18,6 +17,7 @@ import pytest
 
 from demseis.datasets import shard_status, validate_store
 from demseis.datasets.lock import lock_path
+from tests.datasets._helpers import digest
 
 pytestmark = pytest.mark.slow
 
@@ -60,9 +60,6 @@ def _run(cfg: Path, out: Path) -> subprocess.CompletedProcess:
     return subprocess.CompletedProcess(p.args, p.returncode, stdout, stderr)
 
 
-def digest(path: Path) -> dict[str, str]:
-    return {str(f.relative_to(path)): hashlib.sha256(f.read_bytes()).hexdigest()
-            for f in sorted(path.rglob("*")) if f.is_file()}
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,6 @@ of an undamaged store."""
 
 from __future__ import annotations
 
-import hashlib
 import shutil
 from pathlib import Path
 
@@ -21,7 +20,7 @@ from demseis.datasets import (
     write_shard,
 )
 from demseis.errors import StoreError
-from tests.datasets._helpers import PARAMS, make_store, shard_data
+from tests.datasets._helpers import PARAMS, digest, make_store, shard_data
 
 S, SHAPE, N_SHARDS = 6, (24, 32), 4
 CAT_PARAMS = {**PARAMS, "noise_kind": ParamSpec("int8", categories=("white", "band"))}
@@ -41,10 +40,6 @@ def _copy(src: Path, dst: Path) -> Path:
     return dst
 
 
-def digest(path: Path) -> dict[str, str]:
-    """sha256 of every file of a store, by relative path."""
-    return {str(f.relative_to(path)): hashlib.sha256(f.read_bytes()).hexdigest()
-            for f in sorted(path.rglob("*")) if f.is_file()}
 
 
 def _flip(file: Path, offset: int) -> None:
