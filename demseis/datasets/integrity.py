@@ -50,7 +50,7 @@ def _fmt(values: list[int], limit: int = 8) -> str:
     return ", ".join(vals) + (f" ... (+{more})" if more > 0 else "")
 
 
-def shard_damage(path: str | Path, k: int, group=None) -> list[str]:
+def shard_damage(path: str | Path, k: int, group=None, layout=None) -> list[str]:
     """One line per damaged file of shard ``k`` (empty when every checksum holds).
 
     Checks each sample array's shard file (index and every chunk, naming the damaged samples),
@@ -59,7 +59,7 @@ def shard_damage(path: str | Path, k: int, group=None) -> list[str]:
     """
     path = Path(path)
     group = open_store(path, "r+") if group is None else group
-    layout = store_layout(group)
+    layout = store_layout(group) if layout is None else layout
     s = layout.samples_per_shard
     s0 = k * s
     out = []
@@ -107,12 +107,12 @@ def damaged_shards(path: str | Path, group=None) -> dict[int, list[str]]:
     """Damage of every done shard: shard -> problem lines (only damaged shards; a damaged
     done flag counts as a damaged shard)."""
     group = open_store(path, "r+") if group is None else group
-    n = int(group["shard_done"].shape[0])
-    flags, bad_flags = read_done_flags(path, n)
+    layout = store_layout(group)
+    flags, bad_flags = read_done_flags(path, layout.n_shards)
     out: dict[int, list[str]] = {k: [f"shard {k}: done flag is damaged (crc32c mismatch)"]
                                  for k in bad_flags}
     for k in np.flatnonzero(flags == 1).tolist():
-        problems = shard_damage(path, k, group)
+        problems = shard_damage(path, k, group, layout)
         if problems:
             out[k] = problems
     return dict(sorted(out.items()))

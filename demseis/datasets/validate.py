@@ -178,7 +178,7 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
     for k in tqdm(done_shards.tolist(), desc="validate", unit="shard", disable=not progress,
                   file=sys.stderr):
         sel = layout.shard_slice(k)
-        damage = shard_damage(path, k, group)  # checksums: names every damaged sample
+        damage = shard_damage(path, k, group, layout)  # checksums: names every damaged sample
         problems.extend(damage)
         for name in layout.arrays:
             if any(f"shard {k}: {name} " in line for line in damage):
