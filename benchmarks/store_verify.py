@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from demseis.datasets import create_store, shard_status, validate_store, write_shard
-from demseis.datasets._bench import synthetic_shard
+from demseis.bench import synthetic_shard
 
 
 def _median_s(fn, repeats: int) -> float:

@@ -19,8 +19,12 @@ from demseis.datasets._shardio import CRC_NBYTES, check_chunk_file, check_shard_
 from demseis.datasets.store import PARTICLE_FIELDS, open_store, store_layout
 
 
-def read_done_flags(path: str | Path, n_shards: int) -> tuple[np.ndarray, list[int]]:
+def read_done_flags(path: str | Path, n_shards: int, array=None) -> tuple[np.ndarray, list[int]]:
     """Done flags read from the ``shard_done`` chunk files, with their checksums checked.
+
+    ``array`` (the open ``shard_done`` array, optional): when its codecs do not end in
+    ``crc32c`` (a store assembled by hand, not by :func:`create_store`), it is read through
+    zarr instead, unchecked.
 
     Returns
     -------
@@ -28,6 +32,8 @@ def read_done_flags(path: str | Path, n_shards: int) -> tuple[np.ndarray, list[i
         (n_shards,) uint8 flags (a missing chunk is 0: zarr deletes a chunk set to its fill
         value; a damaged one is 0 too) and the shards whose flag chunk is damaged.
     """
+    if array is not None and _last_codec(array) != "crc32c":
+        return np.asarray(array[...], dtype=np.uint8), []
     flags = np.zeros(n_shards, dtype=np.uint8)
     damaged = []
     base = Path(path) / "shard_done" / "c"
@@ -42,6 +48,11 @@ def read_done_flags(path: str | Path, n_shards: int) -> tuple[np.ndarray, list[i
         else:
             flags[k] = arr[0]
     return flags, damaged
+
+
+def _last_codec(array) -> str | None:
+    codecs = array.metadata.to_dict().get("codecs", ())
+    return codecs[-1].get("name") if codecs else None
 
 
 def _fmt(values: list[int], limit: int = 8) -> str:
@@ -108,7 +119,7 @@ def damaged_shards(path: str | Path, group=None) -> dict[int, list[str]]:
     done flag counts as a damaged shard)."""
     group = open_store(path, "r+") if group is None else group
     layout = store_layout(group)
-    flags, bad_flags = read_done_flags(path, layout.n_shards)
+    flags, bad_flags = read_done_flags(path, layout.n_shards, group["shard_done"])
     out: dict[int, list[str]] = {k: [f"shard {k}: done flag is damaged (crc32c mismatch)"]
                                  for k in bad_flags}
     for k in np.flatnonzero(flags == 1).tolist():

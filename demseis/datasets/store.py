@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from demseis import __version__
-from demseis.dem.types import Snapshot
+from demseis.types import Snapshot
 from demseis.errors import InputError, StoreError
 
 SCHEMA_VERSION = 2
@@ -773,7 +773,7 @@ def read_particles(path: str | Path, run_id: int) -> list[Snapshot]:
     Returns
     -------
     list[Snapshot]
-        In snapshot order, with the dtypes of :class:`~demseis.dem.types.Snapshot`
+        In snapshot order, with the dtypes of :class:`~demseis.types.Snapshot`
         (ids int64, xy (n, 2) float64, radius float64, layer int16, deposited bool).
 
     Raises
@@ -911,7 +911,7 @@ def shard_status(path: str | Path, *, verify: bool = False) -> np.ndarray:
     from demseis.datasets.integrity import damaged_shards, read_done_flags
 
     group = open_store(path, "r+")
-    flags, _ = read_done_flags(path, int(group["shard_done"].shape[0]))
+    flags, _ = read_done_flags(path, int(group["shard_done"].shape[0]), group["shard_done"])
     status = (flags == 1).astype(np.uint8)
     if verify:
         for k in damaged_shards(path, group):

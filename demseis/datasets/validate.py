@@ -157,7 +157,7 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
                 f"grid nz, nx = ({grid['nz']}, {grid['nx']}) but samples are {layout.shape}"
             )
 
-    done, damaged_flags = read_done_flags(path, layout.n_shards)
+    done, damaged_flags = read_done_flags(path, layout.n_shards, group["shard_done"])
     for k in damaged_flags:
         problems.append(f"shard {k}: done flag is damaged (crc32c mismatch); the shard counts "
                         "as pending and a resumed sweep rewrites it")

@@ -14,6 +14,7 @@ from demseis.datasets import (
     FaultSegDataset,
     ParamSpec,
     damaged_shards,
+    read_layout,
     read_sample,
     shard_status,
     validate_store,
@@ -182,3 +183,23 @@ def test_every_chunk_has_a_crc32c(pristine):
         if codecs[0]["name"] == "sharding_indexed":
             codecs = codecs[0]["configuration"]["codecs"]
         assert codecs[-1]["name"] == "crc32c", meta
+
+
+def test_plot_of_a_damaged_or_pending_sample_fails_clearly(tmp_path, capsys):
+    from demseis.cli import main
+    from demseis.generator.sweep import run_sweep
+    from tests.datasets._helpers import mini_config
+
+    out = tmp_path / "g.zarr"
+    run_sweep(mini_config(), out, workers=0, progress=False)
+    assert main(["plot", str(out), "--sample", "1", "--out", str(tmp_path / "ok.png")]) == 0
+    f = out / "seismic" / "c" / "0" / "0" / "0"
+    off, n = _chunk_range(f, 1, n_chunks=read_layout(out).samples_per_shard)
+    _flip(f, off + n // 2)
+    assert main(["plot", str(out), "--sample", "1", "--out", str(tmp_path / "bad.png")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "sample 1 of array 'seismic'" in err[0] and "damaged" in err[0]
+    assert not (tmp_path / "bad.png").exists()
+    (out / "shard_done" / "c" / "0").unlink()  # the shard is pending again
+    assert main(["plot", str(out), "--sample", "0", "--out", str(tmp_path / "p.png")]) == 2
+    assert "which is not done" in capsys.readouterr().err

@@ -135,7 +135,7 @@ def test_racing_takeovers_of_a_stale_lock_have_one_winner(tmp_path):
 
 
 def test_generate_and_render_refuse_a_locked_store(tmp_path, capsys):
-    from demseis.generator.cli import main
+    from demseis.cli import main
 
     store = tmp_path / "t.zarr"
     child = _hold(store)

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import zarr
 
+from demseis.cli import main
 from demseis.datasets import SCHEMA_VERSION, open_store, record_failures, validate_store
-from demseis.generator.cli import main
 from tests.datasets._helpers import make_store
 
 

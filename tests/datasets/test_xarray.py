@@ -12,26 +12,14 @@ xr = pytest.importorskip("xarray")
 
 from demseis.datasets import ParamSpec, to_xarray  # noqa: E402
 from demseis.errors import DemseisError  # noqa: E402
-from tests.datasets._helpers import PARAMS, make_store  # noqa: E402
-
-
-def _mini_cfg(domain: str = "depth"):
-    """A sweep of one minute DEM run (a few seconds once Numba's cache is warm)."""
-    from demseis.generator.config import load_config, parse_config
-
-    raw = load_config(preset="tiny").to_dict()
-    raw["sweep"].update(n_runs=1, n_layers=2, throw_m=20.0, dip_deg=60.0, snr_db=[10.0],
-                        noise_kind="band")
-    raw["model"].update(n_snapshots=2, width_m=300.0, height_m=200.0)
-    raw["output"] = {**raw.get("output", {}), "domain": domain, "impedance": True}
-    return parse_config(raw)
+from tests.datasets._helpers import PARAMS, make_store, mini_config  # noqa: E402
 
 
 @pytest.fixture(scope="module", params=["depth", "time"])
 def generated(request, tmp_path_factory):
     from demseis.generator.sweep import run_sweep
 
-    cfg = _mini_cfg(request.param)
+    cfg = mini_config(request.param)
     out = tmp_path_factory.mktemp(request.param) / "g.zarr"
     summary = run_sweep(cfg, out, workers=0, progress=False)
     assert not summary.failed
