@@ -55,7 +55,11 @@ def read_params(root: Any, n: int) -> dict[str, NDArray[Any]]:
     params: dict[str, NDArray[Any]] = {}
     if "params" in set(root.group_keys()):
         for key in sorted(root["params"].array_keys()):
-            arr = np.asarray(root["params"][key][:])
+            try:
+                arr = np.asarray(root["params"][key][:])
+            except Exception as exc:  # noqa: BLE001 - a chunk failing its checksum
+                raise StoreError(f"parameter {key!r} of the store is damaged ({exc}); run "
+                                 "`demseis validate` to list the damaged shards") from exc
             if arr.shape == (n,):
                 params[key] = arr
     return params

@@ -203,3 +203,15 @@ def test_plot_of_a_damaged_or_pending_sample_fails_clearly(tmp_path, capsys):
     (out / "shard_done" / "c" / "0").unlink()  # the shard is pending again
     assert main(["plot", str(out), "--sample", "0", "--out", str(tmp_path / "p.png")]) == 2
     assert "which is not done" in capsys.readouterr().err
+
+
+def test_info_of_a_store_with_a_damaged_parameter_is_one_line(tmp_path, pristine, capsys):
+    from demseis.cli import main
+
+    path = _copy(pristine, tmp_path / "s.zarr")
+    assert main(["info", str(path)]) == 0
+    _flip_param(path)
+    capsys.readouterr()
+    assert main(["info", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "parameter 'freq_hz' of the store is damaged" in err[0]
