@@ -14,8 +14,14 @@ import numpy as np
 from demseis.types import Snapshot
 from demseis.errors import ConfigError, InputError
 from demseis.generator.config import PRESETS, Config, load_config, parse_config
-from demseis.generator.pipeline import grid_of, property_model_of, run_info, simulate_run
-from demseis.generator.sampling import plan_run, rng_at, seed_sequence
+from demseis.generator.pipeline import (
+    grid_of,
+    property_model_of,
+    run_info,
+    run_properties,
+    simulate_run,
+)
+from demseis.generator.sampling import plan_run
 
 
 def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot], dict[str, Any]]:
@@ -85,7 +91,6 @@ def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
 
     from demseis.labels import label_maps, strain_history
     from demseis.seismic import (
-        draw_layer_properties,
         element_properties,
         property_grids,
         rasterise,
@@ -127,8 +132,7 @@ def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
     # Figure 3: particle Vp and density
     model = property_model_of(cfg, p)
     n_total = max(int(s.layer.max()) for s in snaps) + 1
-    layer_props = draw_layer_properties(n_total, model, rng_at(cfg, run, 2))
-    elem_seed = int(seed_sequence(cfg, run, 2).generate_state(2, dtype=np.uint64)[1])
+    layer_props, elem_seed = run_properties(cfg, run, model, n_total)
     last = snaps[-1]
     vp_e, rho_e = element_properties(last.ids, last.layer, layer_props, model, elem_seed)
     fig, axes = plt.subplots(1, 2, figsize=(13, 3.4))

@@ -1,4 +1,5 @@
-"""``demseis generate`` and ``demseis render``: write a dataset, re-render a store's snapshots."""
+"""``demseis generate``, ``demseis render`` and ``demseis params``: write a dataset, re-render a
+store's snapshots, list the parameters a config may set."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from demseis.errors import InputError
 
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``generate`` and ``render``."""
+    """Add ``generate``, ``render`` and ``params``."""
     p = sub.add_parser(
         "generate",
         help="run a sweep and write a labelled dataset (resumes an interrupted one)",
@@ -38,10 +39,18 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_render)
 
+    p = sub.add_parser("params", help="list every parameter: section, level, unit, range, default",
+                       description="Print the declared parameters (demseis.parameters): the "
+                       "config section, where each is drawn (sweep, run or sample), its unit, "
+                       "allowed range and default. docs/parameters.md holds the same table.")
+    p.add_argument("--markdown", action="store_true", help="print the Markdown table of the docs")
+    p.set_defaults(func=cmd_params)
+
 
 def cmd_generate(args: argparse.Namespace) -> int:
+    from demseis.api import generate
     from demseis.generator.config import load_config
-    from demseis.generator.sweep import dry_run_plan, run_sweep
+    from demseis.generator.sweep import dry_run_plan
 
     cfg = load_config(args.config, preset=args.preset)
     if args.dry_run:
@@ -49,10 +58,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
         return 0
     if args.workers is not None and args.scheduler is not None:
         raise InputError("give either --workers or --scheduler, not both")
-    summary = run_sweep(cfg, args.out, workers=args.workers, scheduler=args.scheduler,
-                        overwrite=args.overwrite, progress=not args.quiet)
-    print("\n".join(summary.lines()))
-    return 1 if summary.failed else 0
+    store = generate(cfg, out=args.out, workers=args.workers, scheduler=args.scheduler,
+                     overwrite=args.overwrite, progress=not args.quiet)
+    print("\n".join(store.run_summary.lines()))
+    return 1 if store.run_summary.failed else 0
 
 
 def _float_list(text: str, name: str) -> list[float]:
@@ -77,3 +86,10 @@ def cmd_render(args: argparse.Namespace) -> int:
                        overwrite=args.overwrite, progress=not args.quiet)
     print("\n".join(summary.lines()))
     return 1 if summary.failed else 0
+
+
+def cmd_params(args: argparse.Namespace) -> int:
+    from demseis.parameters import markdown_table, text_table
+
+    print(markdown_table() if args.markdown else text_table(), end="")
+    return 0

@@ -43,9 +43,9 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    from demseis.datasets.read import store_summary
+    from demseis.api import open as open_store
 
-    print("\n".join(store_summary(args.path)))
+    print(open_store(args.path).summary())
     return 0
 
 

@@ -20,7 +20,8 @@ from demseis.datasets.store import open_store, shard_status
 from demseis.errors import InputError, StoreError
 
 
-def done_samples(root: Any, n: int, path: str | Path) -> NDArray[np.bool_]:
+def done_samples(root: Any, n: int, path: str | Path, *,
+                 require_any: bool = True) -> NDArray[np.bool_]:
     """(n,) bool: the samples of completed shards (``shard_done == 1``).
 
     Parameters
@@ -31,11 +32,13 @@ def done_samples(root: Any, n: int, path: str | Path) -> NDArray[np.bool_]:
         Number of samples of the array the mask is for.
     path : str or Path
         The store path, for messages.
+    require_any : bool
+        Raise when no shard is complete (scoring and the baseline need samples).
 
     Raises
     ------
     StoreError
-        The samples do not split into the shards, or no shard is complete.
+        The samples do not split into the shards, or (``require_any``) no shard is complete.
     """
     valid = np.ones(n, bool)
     if "shard_done" in set(root.array_keys()):
@@ -44,7 +47,7 @@ def done_samples(root: Any, n: int, path: str | Path) -> NDArray[np.bool_]:
             raise StoreError(f"store {str(path)!r}: {n} samples do not split into "
                              f"{done.size} shards")
         valid = np.repeat(done, n // done.size)
-    if not valid.any():
+    if require_any and not valid.any():
         raise StoreError(f"store {str(path)!r} is empty: no shard is complete "
                          "(shard_done is 0 everywhere); finish the sweep first")
     return valid
@@ -182,16 +185,16 @@ def store_summary(path: str | Path) -> list[str]:
     lines = [f"store: {path}", f"demseis schema: {attrs.get('demseis', {})}"]
     n, h, w = root["seismic"].shape
     n_shards = int(root["shard_done"].shape[0]) if "shard_done" in root else 1
-    status = shard_status(path) if "shard_done" in root else np.ones(1)
-    lines.append(f"samples: {n} in {n_shards} shards of {n // max(n_shards, 1)}; "
-                 f"done shards: {int((status == 1).sum())}")
+    done = done_samples(root, int(n), path, require_any=False)
+    per_shard = n // max(n_shards, 1)
+    lines.append(f"samples: {n} in {n_shards} shards of {per_shard}; "
+                 f"done shards: {int(done.sum()) // max(per_shard, 1)}")
     grid = attrs.get("grid", {})
     lines.append(f"grid: {h} x {w} cells of {grid.get('cell_m')} m")
     for name in ("seismic", "fault", "damage", "strain", "layer", "impedance"):
         if name in root:
             a = root[name]
             lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks {tuple(a.chunks)}")
-    done = np.repeat(status == 1, n // max(n_shards, 1))
     lines.append("parameters (over done samples):")
     for name, vals in read_params(root, int(n)).items():
         vals = vals[done]

@@ -25,21 +25,19 @@ from demseis.dem.engine import Engine, time_step, validate_material
 from demseis.dem.types import Material, NormalFault
 from demseis.types import Snapshot
 from demseis.errors import InputError
+from demseis.parameters import PARAMS
 
 
 def validate_fault(fault: NormalFault, width_m: float) -> None:
     """Raise :class:`InputError` naming the first bad field of ``fault``."""
     if not (0 < fault.x_m < width_m):
         raise InputError(f"NormalFault.x_m={fault.x_m} must lie inside (0, {width_m}) m")
-    if not (10.0 <= fault.dip_deg <= 80.0):
-        raise InputError(f"NormalFault.dip_deg={fault.dip_deg} is out of range (allowed 10-80)")
+    PARAMS["dip_deg"].check_value(fault.dip_deg, "NormalFault.dip_deg", InputError)
     if not (math.isfinite(fault.throw_m) and fault.throw_m >= 0):
         raise InputError(f"NormalFault.throw_m={fault.throw_m} must be >= 0")
-    if fault.dip_direction not in ("right", "left"):
-        raise InputError(f"NormalFault.dip_direction={fault.dip_direction!r}; allowed "
-                         "'right' or 'left'")
-    if not (math.isfinite(fault.speed_m_s) and 0 < fault.speed_m_s <= 100):
-        raise InputError(f"NormalFault.speed_m_s={fault.speed_m_s} is out of range (0, 100]")
+    PARAMS["dip_direction"].check_value(fault.dip_direction, "NormalFault.dip_direction",
+                                        InputError)
+    PARAMS["wall_speed_m_s"].check_value(fault.speed_m_s, "NormalFault.speed_m_s", InputError)
 
 
 def surface_profile(xy: np.ndarray, radius: np.ndarray, x_edges: np.ndarray) -> np.ndarray:

@@ -15,8 +15,18 @@ import numpy as np
 
 from demseis.dem.types import Material, NormalFault
 from demseis.types import Snapshot
-from demseis.generator.config import _MATERIAL_FIELDS, Config, _property_params, all_params
-from demseis.generator.sampling import RunSpec, plan_run, rng_at, seed_sequence
+from demseis.datasets.store import DEFAULT_ARRAYS, SAMPLE_ARRAYS
+from demseis.generator.config import Config
+from demseis.generator.sampling import (
+    SEED_DEM,
+    SEED_LAYERS,
+    SEED_PROPERTIES,
+    RunSpec,
+    plan_run,
+    rng_at,
+    seed_sequence,
+)
+from demseis.parameters import MATERIAL_FIELDS, PROPERTY_FIELDS, SCENARIO, STORED
 from demseis.types import Grid
 
 #: integer codes of string parameters in the store (``params/<name>`` holds the index)
@@ -25,15 +35,6 @@ PARAM_CODES: dict[str, tuple[str, ...]] = {
     "dip_direction": ("right", "left"),
     "contact_model": ("frictional", "bonded"),
 }
-
-SAMPLE_ARRAYS: dict[str, str] = {
-    "seismic": "float32",
-    "fault": "uint8",
-    "damage": "uint8",
-    "strain": "float32",
-    "layer": "int16",
-}
-
 
 def grid_of(cfg: Config) -> Grid:
     """The raster grid shared by every sample of a sweep."""
@@ -66,28 +67,15 @@ def sample_shape(cfg: Config) -> tuple[int, int]:
 
 def array_dtypes(cfg: Config) -> dict[str, str]:
     """Name → dtype of the per-sample arrays this config stores."""
-    out = dict(SAMPLE_ARRAYS)
-    if cfg.output.impedance:
-        out["impedance"] = "float32"
+    names = DEFAULT_ARRAYS + (("impedance",) if cfg.output.impedance else ())
+    out = {name: str(SAMPLE_ARRAYS[name]) for name in names}
     return out
 
 
 def param_dtypes() -> dict[str, str]:
     """Name → dtype of the per-sample parameter arrays (``params/`` in the store)."""
-    out = {
-        "run_id": "int32",
-        "sample_in_run": "int32",
-        "snapshot": "int16",
-        "step": "int64",
-        "throw_m": "float32",
-        "throw_target_m": "float32",
-        "fault_x_m": "float32",
-        "n_elements": "int32",
-        "freq_hz": "float32",
-        "snr_db": "float32",
-        "noise_seed": "uint64",
-    }
-    for key, pdef in all_params().items():
+    out = {s.name: s.dtype for s in STORED}
+    for key, pdef in SCENARIO.items():
         if key in out:
             continue
         if key in PARAM_CODES:
@@ -135,14 +123,14 @@ def run_info(cfg: Config, params: dict[str, Any]) -> dict[str, Any]:
 
 def material_of(params: dict[str, Any]) -> Material:
     """The DEM material of a run."""
-    return Material(**{field: params[key] for key, field in _MATERIAL_FIELDS.items()})
+    return Material(**{field: params[key] for field, key in MATERIAL_FIELDS.items()})
 
 
 def property_model_of(cfg: Config, params: dict[str, Any]) -> Any:
     """The rock-property model of a run (scalar fields from the run's parameters)."""
     from demseis.seismic import PropertyModel
 
-    scalar = {p.name: params[p.name] for p in _property_params()}
+    scalar = {name: params[name] for name in PROPERTY_FIELDS}
     return PropertyModel(**cfg.properties, **scalar)
 
 
@@ -155,7 +143,7 @@ def simulate_run(
     p = spec.params
     material = material_of(p)
     thick = layer_thicknesses(cfg, int(p["n_layers"]), float(p["layer_thickness_cv"]),
-                              rng_at(cfg, spec.run, 4))
+                              rng_at(cfg, spec.run, SEED_LAYERS))
     info = run_info(cfg, p)
     fault = NormalFault(
         x_m=info["fault_x_m"],
@@ -164,7 +152,7 @@ def simulate_run(
         dip_direction=str(p["dip_direction"]),
         speed_m_s=cfg.model.wall_speed_m_s,
     )
-    rng = rng_at(cfg, spec.run, 1)
+    rng = rng_at(cfg, spec.run, SEED_DEM)
     asm = build_assembly(
         cfg.model.width_m, cfg.model.height_m,
         radius_min_m=cfg.model.radius_min_m, radius_max_m=cfg.model.radius_max_m,
@@ -173,6 +161,19 @@ def simulate_run(
     snaps = simulate(asm, fault, material, n_snapshots=cfg.model.n_snapshots,
                      sedimentation=cfg.model.sedimentation, rng=rng, progress=progress)
     return snaps, info
+
+
+def run_properties(cfg: Config, run: int, model: Any, n_layers_total: int) -> tuple[Any, int]:
+    """The per-layer rock properties of run ``run`` and its per-element scatter seed.
+
+    Both come from the run's ``SEED_PROPERTIES`` node, so every snapshot (and a re-render or a
+    preview) gets the same rock.
+    """
+    from demseis.seismic import draw_layer_properties
+
+    layer_props = draw_layer_properties(n_layers_total, model, rng_at(cfg, run, SEED_PROPERTIES))
+    elem_seed = int(seed_sequence(cfg, run, SEED_PROPERTIES).generate_state(2, dtype=np.uint64)[1])
+    return layer_props, elem_seed
 
 
 @dataclass(frozen=True)
@@ -190,7 +191,6 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
     from demseis.seismic import (
         add_noise,
         depth_to_time,
-        draw_layer_properties,
         element_properties,
         property_grids,
         synthetic_sections,
@@ -200,8 +200,7 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
     p = spec.params
     model = property_model_of(cfg, p)
     n_layers_total = max(int(s.layer.max()) for s in snapshots) + 1
-    layer_props = draw_layer_properties(n_layers_total, model, rng_at(cfg, spec.run, 2))
-    elem_seed = int(seed_sequence(cfg, spec.run, 2).generate_state(2, dtype=np.uint64)[1])
+    layer_props, elem_seed = run_properties(cfg, spec.run, model, n_layers_total)
     history = strain_history(snapshots, cfg.labels)
 
     dtypes = array_dtypes(cfg)

@@ -182,14 +182,16 @@ def warm_numba_cache() -> None:
 def run_cost(cfg: Config, run: int) -> float:
     """Relative cost of DEM run ``run``: integrator steps to the target throw plus settling.
 
-    Steps = path along dip / wall speed / dt, with dt = 0.25 sqrt(m_min / Kn) (Eq. 5); the
-    element count is the same for every run of a sweep. Used to start the longest runs first.
+    Steps = path along dip / wall speed / dt, with the DEM's own time step
+    (:func:`demseis.dem.time_step`); the element count is the same for every run of a sweep.
+    Used to start the longest runs first.
     """
+    from demseis.dem import time_step
     from demseis.generator.sampling import run_params
 
     p = run_params(cfg, run)
     m = cfg.model
-    dt = 0.25 * math.sqrt(p["density_kg_m3"] * math.pi * m.radius_min_m**2 / p["kn_n_m"])
+    dt = time_step(m.radius_min_m, p["density_kg_m3"], p["kn_n_m"])
     path_m = p["throw_m"] / math.sin(math.radians(p["dip_deg"]))
     return (path_m / m.wall_speed_m_s + 4.0) / dt
 
@@ -212,7 +214,9 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
     dip_lo = spec_values_hint(cfg.sweep.params["dip_deg"])[0]
     kn_lo = spec_values_hint(cfg.sweep.params["kn_n_m"])[0]
     rho_hi = spec_values_hint(cfg.sweep.params["density_kg_m3"])[1]
-    dt = 0.25 * math.sqrt(rho_hi * math.pi * a**2 / kn_lo)
+    from demseis.dem import time_step
+
+    dt = time_step(a, rho_hi, kn_lo)
     path_m = throw_hi / math.sin(math.radians(dip_lo))
     steps = path_m / m.wall_speed_m_s / dt
     secs = n_elem * (steps / DRY_RUN_ELEMENT_STEPS_PER_S + DRY_RUN_SETTLE_S_PER_ELEMENT)

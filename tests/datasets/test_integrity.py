@@ -215,3 +215,14 @@ def test_info_of_a_store_with_a_damaged_parameter_is_one_line(tmp_path, pristine
     assert main(["info", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "parameter 'freq_hz' of the store is damaged" in err[0]
+
+
+def test_store_sample_of_a_damaged_sample_fails_clearly(tmp_path, pristine):
+    import demseis
+
+    path = _copy(pristine, tmp_path / "s.zarr")
+    _flip_seismic(path)
+    store = demseis.open(path)
+    assert store.sample(14)["seismic"].shape == SHAPE
+    with pytest.raises(StoreError, match=r"sample 15 of array 'seismic' .* is damaged"):
+        store.sample(15)
