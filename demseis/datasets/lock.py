@@ -166,6 +166,11 @@ class StoreLock:
                 self.holder = me
                 return self
             holder = _read(self.path)
+            for _ in range(50):  # just created by another writer, content not written yet
+                if holder != {}:
+                    break
+                time.sleep(0.02)
+                holder = _read(self.path)
             if holder is None:  # released meanwhile: try again
                 continue
             if not is_stale(holder):

@@ -82,7 +82,7 @@ SAMPLE_ARRAY_SPECS: dict[str, ArraySpec] = {
     "strain": ArraySpec("float32", "1", "maximum shear strain since the reference snapshot"),
     "layer": ArraySpec("int16", "1", "layer index (-1: no rock, above the free surface)",
                        (-1, None)),
-    "impedance": ArraySpec("float32", "kg m-2 s-1", "acoustic impedance", compressed=False),
+    "impedance": ArraySpec("float32", "kg/(m^2 s)", "acoustic impedance", compressed=False),
 }
 """Every per-sample array a store may hold, in store order: adding one is one line here."""
 
@@ -133,12 +133,13 @@ COORDS: dict[str, tuple[str, str]] = {
 stores) or ``twt`` (time-domain stores), columns are ``x``."""
 
 UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
-    ("_kg_m3", "kg m-3"), ("_m_s2", "m s-2"), ("_m_s", "m s-1"), ("_n_m", "N m-1"),
-    ("_deg", "degree"), ("_hz", "Hz"), ("_db", "dB"), ("_cells", "1"), ("_m", "m"),
+    ("_kg_m3", "kg/m^3"), ("_m_s2", "m/s^2"), ("_m_s", "m/s"), ("_n_m", "N/m"),
+    ("_deg", "deg"), ("_hz", "Hz"), ("_db", "dB"), ("_cells", "cells"), ("_m", "m"),
     ("_s", "s"), ("_n", "N"),
 )
-"""Units of a parameter from its name's suffix (the project names carry units), longest first;
-any other name is dimensionless (``"1"``)."""
+"""Units of a parameter given without units (:class:`ParamSpec`), from its name's suffix (the
+project's names carry units), longest first; any other name is dimensionless (``"1"``). The
+generator passes the declared units of :mod:`demseis.parameters`; a test keeps the two in step."""
 
 
 def units_of(name: str) -> str:
@@ -157,7 +158,8 @@ class ParamSpec:
     ----------
     dtype : integer or float dtype.
     long_name : what it is (default: the name with spaces).
-    units : default from the name's suffix (:func:`units_of`).
+    units : e.g. ``"m"``, ``"Hz"``, ``"1"`` (dimensionless); default from the name's suffix
+        (:func:`units_of`).
     categories : names of the codes 0, 1, ... of a categorical parameter (stored as integer
         codes, read back as strings by :func:`to_xarray` and accepted as strings by ``where=``).
     """

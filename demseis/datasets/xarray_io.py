@@ -66,16 +66,21 @@ def to_xarray(path: str | Path) -> Any:
     if pds is not None:
         for name in layout.params:
             var = pds[name]
+            try:
+                values = np.asarray(var.values)
+            except Exception as exc:  # noqa: BLE001 - a chunk failing its checksum
+                raise StoreError(f"parameter {name!r} of store {str(path)!r} is damaged ({exc}); "
+                                 "run `demseis validate` to list the damaged shards") from exc
             cats = var.attrs.get("categories")
             if cats:
-                codes = np.asarray(var.values)
+                codes = values
                 names = np.array(list(cats) + [""], dtype=object)
                 safe = np.where((codes >= 0) & (codes < len(cats)), codes, len(cats))
                 coords[name] = xr.Variable("sample", names[safe].astype(str),
                                            {k: v for k, v in var.attrs.items()
                                             if k not in ("flag_values", "flag_meanings")})
             else:
-                coords[name] = xr.Variable("sample", var.values, dict(var.attrs))
+                coords[name] = xr.Variable("sample", values, dict(var.attrs))
     done = np.repeat(shard_status(path) == 1, layout.samples_per_shard)
     coords["done"] = xr.Variable("sample", done,
                                  {"units": "1", "long_name": "the sample's shard is complete"})

@@ -132,12 +132,14 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
 
 
 def store_param_specs() -> dict[str, Any]:
-    """Per-sample parameters of the store: dtype, description, categories (names of codes)."""
+    """Per-sample parameters of the store with their declared unit and doc (demseis.parameters)
+    and, for the categorical ones, the names of their codes."""
     from demseis.datasets import ParamSpec
-    from demseis.generator.config import all_params
+    from demseis.parameters import SCENARIO, STORED
 
-    docs = all_params()
-    return {k: ParamSpec(v, long_name=docs[k].doc if k in docs else None,
+    decl = {k: (p.unit, p.doc) for k, p in SCENARIO.items()}
+    decl.update({p.name: (p.unit, p.doc) for p in STORED})  # throw_m: the throw reached
+    return {k: ParamSpec(v, long_name=decl[k][1], units=decl[k][0] or "1",
                          categories=PARAM_CODES.get(k))
             for k, v in param_dtypes().items()}
 

@@ -63,11 +63,16 @@ def test_to_xarray_coordinates_units_and_categories(generated):
         np.testing.assert_allclose(ds["depth"].values, grid.top_m - grid.y_centres())
         assert ds["depth"].attrs["units"] == "m"
     units = {name: ds[name].attrs["units"] for name in ds.variables}
-    assert units["impedance"] == "kg m-2 s-1" and units["seismic"] == "1"
-    assert units["throw_m"] == "m" and units["dip_deg"] == "degree"
+    assert units["impedance"] == "kg/(m^2 s)" and units["seismic"] == "1"
+    assert units["throw_m"] == "m" and units["dip_deg"] == "deg"
     assert units["freq_hz"] == "Hz" and units["snr_db"] == "dB"
-    assert units["density_kg_m3"] == "kg m-3" and units["kn_n_m"] == "N m-1"
+    assert units["density_kg_m3"] == "kg/m^3" and units["kn_n_m"] == "N/m"
     assert all(ds[name].attrs["long_name"] for name in ds.variables)
+    from demseis.parameters import SCENARIO, STORED
+
+    declared = {k: p.unit or "1" for k, p in SCENARIO.items()}
+    declared.update({p.name: p.unit or "1" for p in STORED})
+    assert {k: units[k] for k in declared} == declared  # the declarations, one place per fact
     assert set(ds["noise_kind"].values.tolist()) == {"band"}
     assert set(ds["dip_direction"].values.tolist()) <= {"right", "left"}
     assert set(ds["contact_model"].values.tolist()) <= {"frictional", "bonded"}
@@ -98,3 +103,17 @@ def test_missing_xarray_names_the_extra(tmp_path, monkeypatch):
     with pytest.raises(DemseisError, match=r"pip install 'demseis\[xarray\]'"):
         to_xarray(path)
 
+
+
+def test_units_from_names_agree_with_the_declarations():
+    """A parameter given without units gets them from its name: the same as declared."""
+    from demseis.datasets.store import UNIT_SUFFIXES, units_of
+    from demseis.parameters import PARAMS, STORED
+
+    declared = {k: p.unit for k, p in PARAMS.items()} | {p.name: p.unit for p in STORED}
+    checked = 0
+    for name, unit in declared.items():
+        if any(name.endswith(suffix) for suffix, _ in UNIT_SUFFIXES):
+            assert units_of(name) == unit, name
+            checked += 1
+    assert checked >= 10
