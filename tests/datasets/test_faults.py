@@ -108,18 +108,23 @@ def test_kill_9_of_the_driver_mid_shard_then_resume(tmp_path, reference, trial):
     out = tmp_path / "s.zarr"
     rng = np.random.default_rng(trial)
     p = _generate(cfg, out)
-    first_done = out / "shard_done" / "c" / "0"
+    k = int(rng.integers(1, 3))  # after shard k is done, kill inside shard k + 1 (of 0..3)
+    done_at = []
     t0 = time.perf_counter()
-    while not first_done.exists():
-        assert p.poll() is None, p.communicate()
-        assert time.perf_counter() - t0 < 300
-        time.sleep(0.01)
-    time.sleep(float(rng.uniform(0.0, 1.5)))  # somewhere in the next shards
+    for j in range(k + 1):
+        while not (out / "shard_done" / "c" / str(j)).exists():
+            assert p.poll() is None, p.communicate()
+            assert time.perf_counter() - t0 < 300
+            time.sleep(0.002)
+        done_at.append(time.perf_counter())
+    # at a random moment within the next shard (a shard takes about as long as the last one)
+    time.sleep(float(rng.uniform(0.0, 0.6)) * (done_at[-1] - done_at[-2]))
+    assert p.poll() is None, "the sweep finished before the kill"
     os.kill(p.pid, signal.SIGKILL)
     p.wait()
     assert lock_path(out).exists()  # the dead driver's lock is left behind
     status = shard_status(out)
-    assert status[0] == 1 and status.sum() < len(status)
+    assert status[: k + 1].all() and status.sum() < len(status)
     assert validate_store(out).ok  # the done shards are intact
     res = _run(cfg, out)  # takes over the stale lock and completes the store
     assert res.returncode == 0, res.stderr
