@@ -36,8 +36,9 @@ def _all_groups(path):
 
 def test_open_datatree_opens_every_group(generated):
     _, out = generated
-    tree = xr.open_datatree(out, engine="zarr", consolidated=False)
-    assert {node.path for node in tree.subtree} == _all_groups(out)
+    for consolidated in (None, False):  # the finalized store's consolidated metadata, the files
+        tree = xr.open_datatree(out, engine="zarr", consolidated=consolidated)
+        assert {node.path for node in tree.subtree} == _all_groups(out)
     for node in tree.subtree:
         for name, var in node.dataset.variables.items():
             assert "units" in var.attrs and "long_name" in var.attrs, (node.path, name)
