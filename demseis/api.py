@@ -122,7 +122,10 @@ class Store:
         if not self.done[i]:
             raise StoreError(f"sample {i} of {str(self.path)!r} belongs to a shard that is not "
                              "complete; finish the sweep first (rerun demseis generate)")
-        out: dict[str, Any] = {name: np.asarray(self._root[name][i]) for name in self.arrays}
+        from demseis.datasets import read_sample
+
+        # checksums checked: a damaged sample is a StoreError naming the sample and the array
+        out: dict[str, Any] = dict(read_sample(self.path, i, self.arrays).arrays)
         for k, v in self.params.items():
             out[k] = v[i].item() if hasattr(v[i], "item") else v[i]
         return out

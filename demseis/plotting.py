@@ -205,26 +205,21 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from demseis.datasets import open_store
+    from demseis.datasets import open_store, read_sample
 
     root = open_store(store)
     n = root["seismic"].shape[0]
     if not 0 <= index < n:
         raise InputError(f"--sample {index}: the store has samples 0..{n - 1}")
-    attrs = dict(root.attrs)
-    grid = attrs["grid"]
-    codes = attrs.get("param_codes", {})
-    sec = np.asarray(root["seismic"][index])
-    fault = np.asarray(root["fault"][index])
-    damage = np.asarray(root["damage"][index])
-    p = {k: root["params"][k][index] for k in ("run_id", "snapshot", "dip_deg", "throw_m", "freq_hz",
-                                               "snr_db", "noise_kind")}
-    noise = codes.get("noise_kind", ["white", "band"])[int(p["noise_kind"])]
+    grid = dict(root.attrs)["grid"]
+    # StoreError naming the sample when it is damaged or its shard is not done
+    sample = read_sample(store, index, ("seismic", "fault", "damage"))
+    sec, fault, damage = (sample.arrays[k] for k in ("seismic", "fault", "damage"))
+    p = sample.params
+    noise = p["noise_kind"]
     imaging = ""
-    if "imaging" in root["params"]:       # stores written before the PSF option have only 1-D
-        kind = codes.get("imaging", ["1d", "psf"])[int(root["params"]["imaging"][index])]
-        imaging = ", 1-D" if kind == "1d" else (
-            f", PSF {float(root['params']['psf_max_angle_deg'][index]):g}°")
+    if "imaging" in p:       # stores written before the PSF option have only 1-D
+        imaging = ", 1-D" if p["imaging"] == "1d" else f", PSF {float(p['psf_max_angle_deg']):g}°"
     w_m = grid["nx"] * grid["cell_m"]
     h_m = grid["nz"] * grid["cell_m"]
     extent = (0, w_m / 1000, h_m / 1000, 0)

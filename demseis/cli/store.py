@@ -18,10 +18,11 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
     p = sub.add_parser(
         "validate",
-        help="check a demseis store (done shards complete, finite, labels in range)",
-        description="Check every done shard of a demseis store: complete, no NaN, label values "
-        "in range, consistent parameters. Exit 0 when fine, 1 with the list of problems, "
-        "2 for a missing or foreign store.",
+        help="check a demseis store (checksums, done shards complete, labels in range)",
+        description="Check every done shard of a demseis store: every chunk checksum (naming "
+        "each damaged sample and array), complete, no NaN, label values in range, consistent "
+        "parameters. Read only: it takes no lock. Exit 0 when fine, 1 with the list of "
+        "problems, 2 for a missing or foreign store.",
     )
     p.add_argument("path", metavar="PATH", help="store directory")
     p.add_argument("--no-particles", action="store_true",

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from demseis.datasets.store import open_store
+from demseis.datasets.store import open_store, shard_status
 from demseis.errors import InputError, StoreError
 
 
@@ -42,7 +42,7 @@ def done_samples(root: Any, n: int, path: str | Path, *,
     """
     valid = np.ones(n, bool)
     if "shard_done" in set(root.array_keys()):
-        done = np.asarray(root["shard_done"][:]) == 1
+        done = shard_status(path) == 1  # a damaged flag reads as not done
         if done.size == 0 or n % done.size:
             raise StoreError(f"store {str(path)!r}: {n} samples do not split into "
                              f"{done.size} shards")
@@ -58,7 +58,11 @@ def read_params(root: Any, n: int) -> dict[str, NDArray[Any]]:
     params: dict[str, NDArray[Any]] = {}
     if "params" in set(root.group_keys()):
         for key in sorted(root["params"].array_keys()):
-            arr = np.asarray(root["params"][key][:])
+            try:
+                arr = np.asarray(root["params"][key][:])
+            except Exception as exc:  # noqa: BLE001 - a chunk failing its checksum
+                raise StoreError(f"parameter {key!r} of the store is damaged ({exc}); run "
+                                 "`demseis validate` to list the damaged shards") from exc
             if arr.shape == (n,):
                 params[key] = arr
     return params

@@ -40,10 +40,19 @@ def rerender_config(source_cfg: dict[str, Any], freqs_hz: list[float], snrs_db: 
     return parse_config(raw, source="re-render config")
 
 
-def rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snrs_db: list[float],
-             noise_kind: str = "white", imaging: list[str] | None = None,
-             psf_max_angles_deg: list[float] | None = None, psf_aperture_m: float | None = None,
-             overwrite: bool = False, progress: bool = True) -> SweepSummary:
+def rerender(source: str | Path, out: str | Path, **options: Any) -> SweepSummary:
+    """Write a new store with every done run of ``source`` re-rendered, holding ``out``'s
+    writer lock (options: those of :func:`_rerender`)."""
+    from demseis.datasets import writer_lock
+
+    with writer_lock(out, "demseis render"):
+        return _rerender(source, out, **options)
+
+
+def _rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snrs_db: list[float],
+              noise_kind: str = "white", imaging: list[str] | None = None,
+              psf_max_angles_deg: list[float] | None = None, psf_aperture_m: float | None = None,
+              overwrite: bool = False, progress: bool = True) -> SweepSummary:
     """Write a new store with every done run of ``source`` re-rendered.
 
     Runs that are not done in the source are recorded as failed in the new store. The
