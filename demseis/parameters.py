@@ -103,38 +103,39 @@ class Param:
 
         Integers are accepted for floats, ``"inf"`` for a float whose range admits inf.
         """
-        bad = error(f"{where} = {value!r} is not allowed: expected {self.allowed()}")
+        coerced, ok = self._coerce(value)
+        if not ok:
+            raise error(f"{where} = {value!r} is not allowed: expected {self.allowed()}")
+        return coerced
+
+    def _coerce(self, value: Any) -> tuple[Any, bool]:
+        """(coerced value, whether it is allowed); the error is only formatted on failure."""
         if self.kind is bool:
-            if not isinstance(value, bool):
-                raise bad
-            return value
+            return value, isinstance(value, bool)
         if self.kind is str:
-            if not isinstance(value, str) or (self.choices and value not in self.choices):
-                raise bad
-            return value
+            return value, isinstance(value, str) and not (self.choices and value not in self.choices)
         if isinstance(value, str) and self.kind is float and value.strip().lower() in ("inf", "+inf"):
             value = math.inf
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             try:  # numpy scalars
                 value = value.item()
             except AttributeError:
-                raise bad from None
+                return value, False
             if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise bad
+                return value, False
         if self.kind is int:
             if isinstance(value, float) and not value.is_integer():
-                raise bad
+                return value, False
             value = int(value)
         else:
             value = float(value)
             if math.isnan(value):
-                raise bad
+                return value, False
         if not self.in_range(value):
-            raise bad
+            return value, False
         if self.kind is float and math.isinf(value) and self.hi != math.inf:
-            raise bad
-        return value
-
+            return value, False
+        return value, True
 
 def _fmt(x: float) -> str:
     if x == math.inf:
