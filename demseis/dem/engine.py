@@ -336,3 +336,32 @@ class Engine:
         self.wall_shear = np.vstack([self.wall_shear, np.zeros((m, self.walls.shape[0]))])
         self._wall_cand = np.zeros((self.walls.shape[0], n + m), np.int32)
         self.rebuild()
+
+    def remove_elements(self, keep: np.ndarray) -> None:
+        """Drop the elements where ``keep`` is False (erosion); the others keep their order,
+        state and pair history (pairs with a removed element are dropped)."""
+        keep = np.asarray(keep, dtype=bool).reshape(-1)
+        if keep.shape[0] != self.n:
+            raise InputError(f"keep has {keep.shape[0]} entries; expected {self.n}")
+        if keep.all():
+            return
+        new_index = np.cumsum(keep) - 1
+        new_index[~keep] = -1
+        old_nbr, old_n = self.nbr[keep], self.n_nbr[keep]
+        old_shear, old_bond = self.shear[keep], self.bond[keep]
+        cols = np.arange(self.capacity)[None, :]
+        listed = cols < old_n[:, None]
+        mapped = np.where(listed, new_index[old_nbr], -1)
+        valid = mapped >= 0
+        # stable compaction of every row: valid entries first, in their old order
+        order = np.argsort(~valid, axis=1, kind="stable")
+        for name in ("pos", "radius", "mass", "inv_mass", "eta", "vel", "force", "wall_shear"):
+            setattr(self, name, np.ascontiguousarray(getattr(self, name)[keep]))
+        m = int(keep.sum())
+        self._alloc_lists(m)
+        self.n_nbr[:] = valid.sum(axis=1)
+        self.nbr[:] = np.take_along_axis(np.where(valid, mapped, 0), order, axis=1)
+        self.shear[:] = np.take_along_axis(np.where(valid, old_shear, 0.0), order, axis=1)
+        self.bond[:] = np.take_along_axis(np.where(valid, old_bond, 0), order, axis=1)
+        self._wall_cand = np.zeros((self.walls.shape[0], m), np.int32)
+        self.rebuild()
