@@ -317,6 +317,8 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
     eng.vmax_limit = max(100.0, 20 * system.speed_m_s)
     if material.model == "bonded":
         eng.bond_initial_contacts()
+    elif material.model == "brittle":
+        eng.bond_initial_contacts(tol_frac=0.0, flag=2)  # touching pairs: no initial pull
     else:
         eng.rebuild()
 

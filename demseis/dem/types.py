@@ -25,8 +25,11 @@ class Material:
         5e7 N is ~10% of mu * Fn at 1 km depth: brittle near the surface, frictional at depth;
         with C0 = 0 a 45 deg basement fault only makes a broad monocline (docs/dem.md).
     bond_strain : bond-breaking strain r0 (bond breaks when d - R > r0 * R).
-    model : ``"frictional"`` (all bonds start broken) or ``"bonded"`` (bonds between initial
-        neighbours).
+    model : ``"frictional"`` (all bonds start broken; every contact, new or old, carries C0:
+        cohesion heals, so deformation stays distributed: the ductile end), ``"bonded"``
+        (tensile bonds between initial neighbours) or ``"brittle"`` (bonds between initial
+        neighbours that break in tension at r0 or in shear at C0 + mu Fn; C0 lives only on
+        the bonds, new contacts are frictional: strain softening that localises slip).
     damping_scale : global viscous damping eta = dt * damping_scale (N s / m per second of dt).
         The paper's 3.0e9 makes the terminal sinking speed of the smallest element (m g / eta,
         ~1.4 m/s at Kn = 1e10) slower than the basement subsides, so the hanging wall detaches
