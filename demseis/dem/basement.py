@@ -312,8 +312,8 @@ def draw_fault_system(rng: np.random.Generator, width_m: float, *, structure: st
         listric).
     dip_deg, throw_m : dip and throw of every fault (a listric throw is capped at its
         allowed maximum).
-    spacing_frac : fault spacing (domino) or block width (graben, horst) as a fraction of
-        ``width_m``.
+    spacing_frac : fault spacing (domino; shrunk so that the set spans at most 80% of the
+        width) or block width (graben, horst; at most 70%) as a fraction of ``width_m``.
     listric_radius_m : radius of a listric fault.
     dip_direction : ``"right"``/``"left"``; None draws it.
     """
@@ -322,10 +322,11 @@ def draw_fault_system(rng: np.random.Generator, width_m: float, *, structure: st
     direction = dip_direction or ("right" if rng.random() < 0.5 else "left")
     spacing = spacing_frac * width_m
     if structure == "domino":
+        if not (1 <= n_faults <= MAX_FAULTS):
+            raise InputError(f"n_faults={n_faults} is out of range (1-{MAX_FAULTS})")
+        if n_faults > 1:  # the set spans at most 80% of the width
+            spacing = min(spacing, 0.8 * width_m / (n_faults - 1))
         span = (n_faults - 1) * spacing
-        if span > 0.8 * width_m:
-            raise InputError(f"{n_faults} faults {spacing:.0f} m apart do not fit in "
-                             f"{width_m:.0f} m (at most 80% of the width)")
         x0 = rng.uniform(0.1 * width_m, 0.9 * width_m - span)
         system = domino(n_faults, x0, spacing, dip_deg, throw_m, direction, kind)
     elif structure in ("graben", "horst"):

@@ -24,8 +24,9 @@ as dense as the pre-kinematic ones), get new ids and ``deposited=True``, and set
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -239,12 +240,27 @@ def basement_walls(system: FaultSystem, motions: list[BlockMotion], width_m: flo
     return np.array(walls), np.array(owner, dtype=np.int64)
 
 
+def _layer_cmat(asm: Assembly, layer_materials: Sequence[Material]) -> tuple[np.ndarray, float]:
+    """(n, 4) per-element [Kn, mu, C0, r0] from one Material per layer, and the largest Kn."""
+    if len(layer_materials) != asm.n_layers:
+        raise InputError(f"layer_materials has {len(layer_materials)} entries; expected one per "
+                         f"layer ({asm.n_layers})")
+    rows = np.empty((asm.n_layers, 4))
+    for k, m in enumerate(layer_materials):
+        if not isinstance(m, Material):
+            raise InputError(f"layer_materials[{k}] must be a Material, got {type(m).__name__}")
+        validate_material(m)
+        rows[k] = (m.kn_n_m, m.friction, m.cohesion_n, m.bond_strain)
+    return rows[asm.layer], float(rows[:, 0].max())
+
+
 def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material = Material(),
              *, n_snapshots: int = 6, sedimentation: bool = True,
              rng: np.random.Generator | int | None = None,
              progress: Callable[[float], None] | None = None,
              settle_steps: int | None = None,
-             erosion_level_m: float | None = None) -> list[Snapshot]:
+             erosion_level_m: float | None = None,
+             layer_materials: Sequence[Material] | None = None) -> list[Snapshot]:
     """Fault ``asm`` by moving its basement blocks (see the module docstring).
 
     Parameters
@@ -264,6 +280,12 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
         every snapshot, elements whose centre lies above this elevation are removed (their ids
         no longer appear). Use ``asm.height_m`` to keep uplifted material inside the sample
         grid. None (default): nothing is removed.
+    layer_materials : optional mechanical stratigraphy, one Material per pre-kinematic layer
+        (``asm.n_layers``; see :func:`demseis.dem.strata.layer_materials`). Their contact
+        fields (``kn_n_m``, ``friction``, ``cohesion_n``, ``bond_strain``) apply to the
+        elements of that layer (a contact takes the smaller value of its two elements);
+        ``material`` keeps the model, ``ks_ratio``, density, damping, gravity, the walls and
+        the growth layers. dt follows the largest Kn.
 
     Returns
     -------
@@ -300,10 +322,17 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
     motions = block_kinematics(system, W)
     rotating = [b for b, m in enumerate(motions) if m.rotates]
 
+    cmat = None
+    if layer_materials is not None:
+        cmat, kn_max = _layer_cmat(asm, layer_materials)
+        if kn_max > material.kn_n_m:
+            material = dataclasses.replace(material, kn_n_m=kn_max)
     # dt from Eq. 5 with the smallest radius that can ever occur (sediment included)
     dt = time_step(min(rmin, float(asm.radius.min())), material.density_kg_m3,
                    material.kn_n_m)
     eng = Engine(xy0, asm.radius, material, dt_s=dt)
+    if cmat is not None:
+        eng.set_element_material(cmat)
 
     dip_total = master.slip_m()
     walls0, owner = basement_walls(system, motions, W, H, rmax)

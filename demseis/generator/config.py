@@ -32,6 +32,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from demseis.dem.basement import MAX_FAULTS, STRUCTURES
+from demseis.dem.engine import MODELS
 from demseis.dem.types import Material
 from demseis.errors import ConfigError
 from demseis.generator.params import (
@@ -44,7 +46,7 @@ from demseis.generator.params import (
     spec_values_hint,
 )
 
-PRESETS = ("tiny", "quick", "seed")
+PRESETS = ("tiny", "quick", "seed", "variety")
 
 _MAT = Material()
 
@@ -60,6 +62,23 @@ _BASE_PARAMS: tuple[ParamDef, ...] = (
              doc="x where the basement fault meets the model base, as a fraction of the width"),
     ParamDef("dip_direction", str, "run", "right", choices=("right", "left"),
              doc="side of the hanging wall"),
+    # fault systems (demseis.dem.basement); "single" + "normal" is the one-fault model above
+    ParamDef("structure", str, "run", "single", choices=STRUCTURES,
+             doc="basement structure: one fault, a domino (synthetic) set, graben, horst, or "
+                 "half-graben (one listric fault); dip_deg and throw_m apply to every fault"),
+    ParamDef("n_faults", int, "run", 1, 1, MAX_FAULTS,
+             doc="faults of a domino set (graben and horst have 2, the others 1)"),
+    ParamDef("fault_kind", str, "run", "normal", choices=("normal", "reverse", "listric"),
+             doc="kind of the faults of single/domino/graben/horst (a half-graben is listric; "
+                 "listric faults must bound an end block)"),
+    ParamDef("fault_spacing_frac", float, "run", 0.2, 0.08, 0.4,
+             doc="domino fault spacing, or graben/horst width, as a fraction of the model width"),
+    ParamDef("listric_radius_m", float, "run", 5000.0, 1500.0, 20000.0,
+             doc="radius of curvature of a listric fault (m); its throw is capped at 80% of "
+                 "the arc's depth"),
+    ParamDef("strength_contrast", float, "run", 1.0, 1.0, 16.0,
+             doc="mechanical stratigraphy: cohesion ratio strong/weak layers (sandstone and "
+                 "limestone strong, shale weak; 1 = uniform mechanics; demseis.dem.strata)"),
     # layering
     ParamDef("n_layers", int, "run", 48, 1, 250, doc="number of pre-kinematic layers"),
     ParamDef("layer_thickness_cv", float, "run", 0.0, 0.0, 0.9,
@@ -71,8 +90,9 @@ _BASE_PARAMS: tuple[ParamDef, ...] = (
     ParamDef("friction", float, "run", _MAT.friction, 0.0, 2.0, doc="inter-element friction coefficient mu"),
     ParamDef("cohesion_n", float, "run", _MAT.cohesion_n, 0.0, 1.0e12, doc="contact cohesion C0 (N)"),
     ParamDef("bond_strain", float, "run", _MAT.bond_strain, 1.0e-5, 1.0, doc="bond-breaking strain r0"),
-    ParamDef("contact_model", str, "run", _MAT.model, choices=("frictional", "bonded"),
-             doc="frictional-cohesive (bonds start broken) or bonded"),
+    ParamDef("contact_model", str, "run", _MAT.model, choices=MODELS,
+             doc="frictional-cohesive (cohesion heals: ductile), bonded, or brittle (bonds "
+                 "that break in tension or shear: faults localise)"),
     ParamDef("damping_scale", float, "run", _MAT.damping_scale, 0.0, 1.0e13,
              doc="viscous damping eta = dt * damping_scale (N s/m per s)"),
     ParamDef("gravity_m_s2", float, "run", _MAT.gravity_m_s2, 0.0, 100.0, doc="gravity (m/s^2)"),
