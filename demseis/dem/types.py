@@ -67,3 +67,10 @@ class NormalFault:
     throw_m: float = 450.0
     dip_direction: str = "right"
     speed_m_s: float = 5.0
+
+
+#: A brittle cover, calibrated at seed scale (5 km x 2.77 km, 45 deg, 450 m throw): bonds
+#: between touching neighbours that break in tension (r0 = 0.005) or shear (C0 = 1.4e9 N +
+#: mu Fn), cohesion lost with them. The mid-depth horizon steps 299 m (0.66 of the throw)
+#: within 100 m across a ~70 deg master fault (docs/dem.md). ``Material()`` is the ductile end.
+BRITTLE = Material(model="brittle", cohesion_n=1.4e9, bond_strain=0.005)

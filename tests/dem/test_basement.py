@@ -242,3 +242,21 @@ def test_remove_elements_keeps_state_and_history(asm):
                 found += 1
     assert found > 0.5 * sum(keep[i] and keep[j] for i, j in pairs)
     eng.run(100)  # still runs
+
+
+@pytest.mark.slow
+def test_brittle_cover_localises_at_seed_scale():
+    """Seed scale (5 km x 2.77 km, 45 deg, 450 m): the brittle cover steps the mid-depth
+    horizon by >= half the throw within 100 m; the default (ductile) material drapes it."""
+    from demseis.dem import BRITTLE
+    from demseis.dem.measure import horizon_step
+
+    pack = settle_pack(5000.0, 2770.0, rng=0)
+    asm_ = build_assembly(5000.0, 2770.0, n_layers=48, pack=pack)
+    steps = {}
+    for name, mat in (("brittle", BRITTLE), ("ductile", Material())):
+        snaps = simulate(asm_, NormalFault(), mat, n_snapshots=6, rng=0)
+        reach = 0.5 * 1385.0  # search around the fault's trace at mid-depth
+        steps[name] = horizon_step(snaps[-1], 24, 2500.0 - reach, search_m=reach + 300.0)
+    assert steps["brittle"] >= 225.0
+    assert steps["ductile"] < 225.0
