@@ -29,9 +29,10 @@ PARAM_CODES: dict[str, tuple[str, ...]] = {
     "fault_kind": ("normal", "reverse", "listric"),
 }
 
-#: per-sample record of the basement faults: ``fault<k>_<field>`` for k < MAX_FAULTS (NaN /
-#: -1 where a run has fewer faults); kind codes index FAULT_KINDS, direction codes
-#: PARAM_CODES["dip_direction"].
+#: per-sample record of the basement faults: ``fault<k>_<field>`` for k < MAX_FAULTS (-1 in
+#: every field where a run has fewer faults: the store holds no NaN); kind codes index
+#: PARAM_CODES["fault_kind"], direction codes PARAM_CODES["dip_direction"].
+ABSENT = -1.0
 FAULT_FIELDS = ("kind", "x_m", "dip_deg", "throw_m", "throw_target_m", "dip_direction")
 
 SAMPLE_ARRAYS: dict[str, str] = {
@@ -187,10 +188,10 @@ def run_info(cfg: Config, params: dict[str, Any], run: int) -> dict[str, Any]:
         info[f"fault{k}_kind"] = PARAM_CODES["fault_kind"].index(f.kind) if f else -1
         info[f"fault{k}_dip_direction"] = (PARAM_CODES["dip_direction"].index(f.dip_direction)
                                            if f else -1)
-        info[f"fault{k}_x_m"] = f.x_m if f else np.nan
-        info[f"fault{k}_dip_deg"] = f.dip_deg if f else np.nan
-        info[f"fault{k}_throw_target_m"] = f.throw_m if f else np.nan
-        info[f"fault{k}_throw_m"] = np.nan
+        info[f"fault{k}_x_m"] = f.x_m if f else ABSENT
+        info[f"fault{k}_dip_deg"] = f.dip_deg if f else ABSENT
+        info[f"fault{k}_throw_target_m"] = f.throw_m if f else ABSENT
+        info[f"fault{k}_throw_m"] = ABSENT
     info["_system"] = system
     return info
 
@@ -199,7 +200,7 @@ def fault_throws_of(info: dict[str, Any], snapshot: int, n_snapshots: int) -> di
     """``fault<k>_throw_m`` (throw so far) of every fault at snapshot ``snapshot``."""
     system = info["_system"]
     throws = system.throws_at(snapshot / (n_snapshots - 1))
-    return {f"fault{k}_throw_m": float(t) for k, t in enumerate(throws)}
+    return {f"fault{k}_throw_m": float(t) for k, t in enumerate(throws)}  # absent ones stay -1
 
 
 def material_of(params: dict[str, Any]) -> Material:
