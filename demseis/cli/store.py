@@ -43,8 +43,9 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
 def cmd_info(args: argparse.Namespace) -> int:
     from demseis.datasets.read import store_summary
+    from demseis.generator.faultinfo import fault_distribution
 
-    print("\n".join(store_summary(args.path)))
+    print("\n".join(store_summary(args.path) + fault_distribution(args.path)))
     return 0
 
 

@@ -154,7 +154,8 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_he
     nbr, n_nbr, shear, bond : Verlet list and history, updated in place (X_s, broken bonds).
         ``bond``: 0 none, 1 tensile bond, 2 brittle bond (see module doc).
     cmat : (n, 4) float64 per-element contact material [Kn (N/m), mu, C0 (N), r0]; a pair
-        uses the smaller of its two elements' values.
+        uses the smaller of its two elements' values. A (1, 4) array gives every element
+        that row (uniform mechanics).
     ks_ratio : float Ks / Kn.
     c0_heal : float fraction of C0 that a contact without a bond (0) carries: 1 in the
         frictional and bonded models (every contact is cohesive), 0 in the brittle model
@@ -168,14 +169,16 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_he
     """
     n = pos.shape[0]
     nbroken = 0
+    layered = cmat.shape[0] > 1  # one row: every element has the same material
     for i in range(n):
         xi = pos[i, 0]
         yi = pos[i, 1]
         ri = radius[i]
-        kni = cmat[i, 0]
-        mui = cmat[i, 1]
-        c0i = cmat[i, 2]
-        r0i = cmat[i, 3]
+        ci = i if layered else 0
+        kni = cmat[ci, 0]
+        mui = cmat[ci, 1]
+        c0i = cmat[ci, 2]
+        r0i = cmat[ci, 3]
         fxi = 0.0
         fyi = 0.0
         for k in range(n_nbr[i]):
@@ -185,9 +188,10 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_he
             rr = ri + radius[j]
             d2 = dx * dx + dy * dy
             b = bond[i, k]
+            cj = j if layered else 0
             if b != 0:
                 d = np.sqrt(d2)
-                r0 = min(r0i, cmat[j, 3])
+                r0 = min(r0i, cmat[cj, 3])
                 if d - rr > r0 * rr:
                     bond[i, k] = 0
                     b = 0
@@ -201,9 +205,9 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_he
                     bond[i, k] = 0
                     continue
                 d = np.sqrt(d2)
-            kn = min(kni, cmat[j, 0])
-            mu = min(mui, cmat[j, 1])
-            c0 = min(c0i, cmat[j, 2])
+            kn = min(kni, cmat[cj, 0])
+            mu = min(mui, cmat[cj, 1])
+            c0 = min(c0i, cmat[cj, 2])
             ks = ks_ratio * kn
             inv_d = 1.0 / d
             nx = dx * inv_d

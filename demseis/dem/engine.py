@@ -110,8 +110,8 @@ class Engine:
         self.ks_ratio = float(material.ks_ratio)
         # brittle model: cohesion only on the initial bonds (lost when they break)
         self.c0_heal = 0.0 if material.model == "brittle" else 1.0
-        self.cmat = np.empty((n, 4))
-        self.cmat[:] = self._material_row()
+        # (1, 4): uniform mechanics (one row for every element); (n, 4) once set per element
+        self.cmat = self._material_row()[None, :].copy()
         self.wall_mu = float(self.mu if wall_friction is None else wall_friction)
         rmax = float(self.radius.max()) if n else 1.0
         self.skin = float(skin_m) if skin_m is not None else max(
@@ -346,7 +346,8 @@ class Engine:
         mass = self.material.density_kg_m3 * math.pi * radius**2
         self.mass = np.concatenate([self.mass, mass])
         self.inv_mass = 1.0 / self.mass
-        self.cmat = np.vstack([self.cmat, np.tile(self._material_row(), (m, 1))])
+        if self.cmat.shape[0] > 1:
+            self.cmat = np.vstack([self.cmat, np.tile(self._material_row(), (m, 1))])
         if self._eta_default is None or np.ndim(self._eta_default) == 0:
             add_eta = self._make_eta(self._eta_default, m)
         else:
@@ -382,9 +383,10 @@ class Engine:
         valid = mapped >= 0
         # stable compaction of every row: valid entries first, in their old order
         order = np.argsort(~valid, axis=1, kind="stable")
-        for name in ("pos", "radius", "mass", "inv_mass", "eta", "vel", "force", "wall_shear",
-                     "cmat"):
+        for name in ("pos", "radius", "mass", "inv_mass", "eta", "vel", "force", "wall_shear"):
             setattr(self, name, np.ascontiguousarray(getattr(self, name)[keep]))
+        if self.cmat.shape[0] > 1:
+            self.cmat = np.ascontiguousarray(self.cmat[keep])
         m = int(keep.sum())
         self._alloc_lists(m)
         self.n_nbr[:] = valid.sum(axis=1)

@@ -125,7 +125,9 @@ def test_pair_forces_match_reference(c0, flag, heal, layered):
         cmat[weak] = [3e9, 0.2, 0.2 * c0, 0.005]
     ks_ratio, dt = 0.5, 0.003
     f = np.zeros((n, 2))
-    K.pair_forces(pos, vel, r, nbr, nn, sh, bo, cmat, ks_ratio, heal, dt, f)
+    # uniform mechanics go in as one row, layered ones as one row per element
+    K.pair_forces(pos, vel, r, nbr, nn, sh, bo, cmat if layered else cmat[:1], ks_ratio, heal,
+                  dt, f)
     f_ref, sh_ref, bo_ref = _pair_forces_ref(pos, vel, r, pairs, shear0, bond0, cmat, ks_ratio,
                                              heal, dt)
     np.testing.assert_allclose(f, f_ref, rtol=1e-9, atol=1e-9 * np.abs(f_ref).max())

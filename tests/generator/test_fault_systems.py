@@ -68,3 +68,23 @@ def test_samples_record_their_basement_faults():
     for k in (0, 1):  # throw so far grows with the snapshot to the target
         np.testing.assert_allclose(p[f"fault{k}_throw_m"], 60.0 * snap / 2, atol=1e-3)
         assert np.all(p[f"fault{k}_throw_target_m"] == 60.0)
+
+
+def test_fault_distribution_counts_runs(tmp_path):
+    import zarr
+
+    from demseis.generator.faultinfo import fault_distribution
+
+    root = zarr.open_group(str(tmp_path / "s.zarr"), mode="w")
+    p = root.create_group("params")
+    # 3 runs of 2 samples; the third is not done (zeros)
+    cols = {"sample_in_run": [0, 1, 0, 1, 0, 1], "n_basement_faults": [2, 2, 1, 1, 0, 0],
+            "structure": [2, 2, 4, 4, 0, 0],
+            "fault0_kind": [0, 0, 2, 2, 0, 0], "fault1_kind": [0, 0, -1, -1, 0, 0]}
+    for name, v in cols.items():
+        p.create_array(name, data=np.array(v, np.int8))
+    lines = fault_distribution(tmp_path / "s.zarr")
+    assert lines[0] == "basement faults over 2 runs:"
+    assert "graben: 1" in lines[1] and "half_graben: 1" in lines[1] and "single" not in lines[1]
+    assert lines[2].split(None, 1)[1] == "1: 1, 2: 1"
+    assert "listric: 1, normal: 2 (3 faults)" in lines[3]
