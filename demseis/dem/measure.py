@@ -41,6 +41,27 @@ def horizon_profile(snap: Snapshot, layers: int | tuple[int, ...], x_edges: np.n
     return out
 
 
+def _window_drops(snap: Snapshot, layers, x_m: float, dip_direction: str, window_m: float,
+                  search_m: float, bin_m: float):
+    """(window centres, drops, footwall-side and hanging-wall-side elevations) of every
+    ``window_m`` window whose centre lies within ``search_m`` of ``x_m`` (drops may be NaN)."""
+    if dip_direction not in ("right", "left"):
+        raise InputError(f"dip_direction={dip_direction!r}; allowed 'right' or 'left'")
+    if not (window_m > 0 and bin_m > 0 and window_m >= bin_m):
+        raise InputError(f"need window_m >= bin_m > 0, got {window_m}, {bin_m}")
+    lo = x_m - search_m - window_m
+    n = int(math.ceil((2 * search_m + 2 * window_m) / bin_m))
+    edges = lo + bin_m * np.arange(n + 1)
+    h = horizon_profile(snap, layers, edges)
+    k = int(round(window_m / bin_m))
+    a, b = h[:-k], h[k:]
+    drop = a - b if dip_direction == "right" else b - a
+    centre = 0.5 * (edges[:-1] + edges[1:])
+    mid = 0.5 * (centre[:-k] + centre[k:])
+    near = np.abs(mid - x_m) <= search_m
+    return mid[near], drop[near], a[near], b[near]
+
+
 def horizon_step(snap: Snapshot, layers: int | tuple[int, ...], x_m: float, *,
                  dip_direction: str = "right", window_m: float = 100.0,
                  search_m: float = 600.0, bin_m: float = 25.0) -> float:
@@ -58,21 +79,38 @@ def horizon_step(snap: Snapshot, layers: int | tuple[int, ...], x_m: float, *,
     float: the largest drop (m, > 0 down towards the hanging wall); NaN if no window has data
     on both sides.
     """
-    if dip_direction not in ("right", "left"):
-        raise InputError(f"dip_direction={dip_direction!r}; allowed 'right' or 'left'")
-    if not (window_m > 0 and bin_m > 0 and window_m >= bin_m):
-        raise InputError(f"need window_m >= bin_m > 0, got {window_m}, {bin_m}")
-    lo = x_m - search_m - window_m
-    n = int(math.ceil((2 * search_m + 2 * window_m) / bin_m))
-    edges = lo + bin_m * np.arange(n + 1)
-    h = horizon_profile(snap, layers, edges)
-    k = int(round(window_m / bin_m))
-    a, b = h[:-k], h[k:]
-    drop = a - b if dip_direction == "right" else b - a
-    centre = 0.5 * (edges[:-1] + edges[1:])
-    mid = 0.5 * (centre[:-k] + centre[k:])
-    ok = np.isfinite(drop) & (np.abs(mid - x_m) <= search_m)
+    _, drop, _, _ = _window_drops(snap, layers, x_m, dip_direction, window_m, search_m, bin_m)
+    ok = np.isfinite(drop)
     return float(np.max(drop[ok])) if ok.any() else float("nan")
+
+
+def fault_crossings(snap: Snapshot, layers, x_m: float, *, dip_direction: str = "right",
+                    window_m: float = 100.0, search_m: float = 600.0, bin_m: float = 25.0
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Where a fault crosses each horizon: centre of its ``window_m`` window of largest drop.
+
+    For every layer in ``layers`` (each one horizon), the windows of :func:`horizon_step`
+    whose drop is within 1% of the largest (a clean step gives the same drop in every window
+    that straddles it): their mean centre.
+
+    Returns
+    -------
+    x, y : (len(layers),) float64 the window centre and the horizon's mean elevation at the
+    window's two ends (m); NaN where a horizon has no window with data on both sides.
+    """
+    layers = list(layers)
+    xs = np.full(len(layers), np.nan)
+    ys = np.full(len(layers), np.nan)
+    for q, layer in enumerate(layers):
+        mid, drop, a, b = _window_drops(snap, layer, x_m, dip_direction, window_m, search_m,
+                                        bin_m)
+        ok = np.isfinite(drop)
+        if ok.any():
+            top = np.max(drop[ok])
+            best = ok & (drop >= top - 0.01 * abs(top))  # ties: a clean step spans windows
+            xs[q] = float(np.mean(mid[best]))
+            ys[q] = float(np.mean(0.5 * (a[best] + b[best])))
+    return xs, ys
 
 
 def _common(ref: Snapshot, cur: Snapshot) -> tuple[np.ndarray, np.ndarray]:

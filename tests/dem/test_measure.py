@@ -68,3 +68,21 @@ def test_section_length():
     s = snapshot([[5, 1], [700, 2], [300, 900]], [0, 0, 0])
     assert section_length(s, 100.0) == 695.0
     assert section_length(s, 1000.0, n_original=1) == 0.0
+
+
+def test_fault_crossings_follow_a_dipping_fault():
+    # horizons 3 and 5 offset by 150 m across a 60-degree fault through (1000, 0)
+    from demseis.dem.measure import fault_crossings
+
+    x = np.arange(0.0, 2000.0, 5.0)
+    xy, layer = [], []
+    for k, y0 in ((3, 300.0), (5, 600.0)):
+        xf = 1000.0 - y0 / np.tan(np.radians(60.0))
+        xy.append(np.c_[x, y0 - 150.0 * (x > xf)])
+        layer.append(np.full(x.size, k))
+    s = snapshot(np.concatenate(xy), np.concatenate(layer))
+    xs, ys = fault_crossings(s, [3, 5], 800.0)
+    np.testing.assert_allclose(xs, 1000.0 - np.array([300.0, 600.0]) / np.tan(np.radians(60.0)),
+                               atol=13.0)
+    dip = np.degrees(np.arctan2(ys[1] - ys[0], abs(xs[1] - xs[0])))
+    assert dip == pytest.approx(60.0, abs=5.0)
