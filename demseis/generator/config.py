@@ -85,7 +85,9 @@ _BASE_PARAMS: tuple[ParamDef, ...] = (
              doc="coefficient of variation of layer thicknesses (0 = equal thicknesses)"),
     # mechanics (demseis.dem.Material; defaults are Material's)
     ParamDef("density_kg_m3", float, "run", _MAT.density_kg_m3, 500.0, 6000.0, doc="element density (kg/m^3)"),
-    ParamDef("kn_n_m", float, "run", _MAT.kn_n_m, 1.0e6, 1.0e13, doc="normal contact stiffness Kn (N/m)"),
+    ParamDef("kn_n_m", float, "run", _MAT.kn_n_m, 1.0e9, 4.0e10,
+             doc="normal contact stiffness Kn (N/m); dt ~ Kn^-1/2, so 4e10 doubles the cost of "
+                 "a run (1e13 made it ~30x)"),
     ParamDef("ks_ratio", float, "run", _MAT.ks_ratio, 0.0, 2.0, doc="shear stiffness Ks / Kn"),
     ParamDef("friction", float, "run", _MAT.friction, 0.0, 2.0, doc="inter-element friction coefficient mu"),
     ParamDef("cohesion_n", float, "run", _MAT.cohesion_n, 0.0, 1.0e12, doc="contact cohesion C0 (N)"),
