@@ -82,7 +82,7 @@ def main(argv=None) -> int:
                   extent=(0, grid.nx * grid.cell_m, grid.top_m - grid.nz * grid.cell_m,
                           grid.top_m))
         ax.set_title(f"{name}: 40 Hz Ricker, no noise")
-    fig.savefig(args.out, dpi=110)
+    fig.savefig(args.out, dpi=80)
     res["figure"] = args.out
     print(json.dumps(res))
     return 0

@@ -62,7 +62,7 @@ def main(argv=None) -> int:
         for ax in (a, b):
             ax.set_xticks([])
             ax.set_yticks([])
-    fig.savefig(args.out, dpi=90)
+    fig.savefig(args.out, dpi=72)
     print(json.dumps({"benchmark": "variety_gallery", "samples": picked, "figure": args.out}))
     return 0
 
