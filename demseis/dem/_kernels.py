@@ -13,7 +13,7 @@ Conventions shared by every kernel
 - Walls are straight segments ``walls`` (nw, 4) float64 ``[x0, y0, x1, y1]`` moving with
   ``wall_vel`` (nw, 2) m/s; ``wall_shear`` (n, nw) float64 is the element-wall X_s history.
 
-Force law (the paper's Eq. 1-4 with the slider correction of DESIGN.md)
+Force law (the paper's Eq. 1-4 with the slider correction of docs/physics.md)
 -------------------------------------------------------------------------
 With d the centre distance, R = r_i + r_j and n the unit vector from i to j:
 

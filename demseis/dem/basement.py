@@ -43,10 +43,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from demseis.errors import InputError
+from demseis.parameters import MAX_BASEMENT_FAULTS, PARAMS
 
-KINDS = ("normal", "reverse", "listric")
-STRUCTURES = ("single", "domino", "graben", "horst", "half_graben")
-MAX_FAULTS = 5
+KINDS = PARAMS["fault_kind"].choices
+STRUCTURES = PARAMS["structure"].choices
+MAX_FAULTS = MAX_BASEMENT_FAULTS
 
 
 @dataclass(frozen=True)
@@ -135,13 +136,10 @@ def check_fault_fields(where: str, f, width_m: float) -> None:
     ``dip_direction`` of ``f`` (a BasementFault or NormalFault), naming it ``where.field``."""
     if not (0 < f.x_m < width_m):
         raise InputError(f"{where}.x_m={f.x_m} must lie inside (0, {width_m}) m")
-    if not (10.0 <= f.dip_deg <= 80.0):
-        raise InputError(f"{where}.dip_deg={f.dip_deg} is out of range (allowed 10-80)")
+    PARAMS["dip_deg"].check_value(f.dip_deg, f"{where}.dip_deg", InputError)
     if not (math.isfinite(f.throw_m) and f.throw_m >= 0):
         raise InputError(f"{where}.throw_m={f.throw_m} must be >= 0")
-    if f.dip_direction not in ("right", "left"):
-        raise InputError(f"{where}.dip_direction={f.dip_direction!r}; allowed 'right' or "
-                         "'left'")
+    PARAMS["dip_direction"].check_value(f.dip_direction, f"{where}.dip_direction", InputError)
 
 
 def validate_system(system: FaultSystem, width_m: float, min_spacing_m: float = 0.0) -> None:

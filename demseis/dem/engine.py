@@ -15,9 +15,11 @@ import numpy as np
 from demseis.dem import _kernels as K
 from demseis.dem.types import Material
 from demseis.errors import InputError, SimulationError
+from demseis.parameters import MATERIAL_FIELDS, PARAMS
 
 
-MODELS = ("frictional", "bonded", "brittle")
+#: contact models (declared in demseis.parameters)
+MODELS = PARAMS["contact_model"].choices
 
 
 def time_step(radius_min_m: float, density_kg_m3: float, kn_n_m: float) -> float:
@@ -39,23 +41,13 @@ def time_step(radius_min_m: float, density_kg_m3: float, kn_n_m: float) -> float
 
 
 def validate_material(material: Material) -> None:
-    """Raise :class:`InputError` naming the first out-of-range field of ``material``."""
-    checks = [
-        ("density_kg_m3", material.density_kg_m3 > 0, "> 0"),
-        ("kn_n_m", material.kn_n_m > 0, "> 0"),
-        ("ks_ratio", 0 < material.ks_ratio <= 10, "in (0, 10]"),
-        ("friction", 0 <= material.friction <= 10, "in [0, 10]"),
-        ("cohesion_n", material.cohesion_n >= 0, ">= 0"),
-        ("bond_strain", 0 < material.bond_strain < 1, "in (0, 1)"),
-        ("damping_scale", material.damping_scale >= 0, ">= 0"),
-        ("gravity_m_s2", material.gravity_m_s2 >= 0, ">= 0"),
-    ]
-    for name, ok, allowed in checks:
-        if not (ok and math.isfinite(getattr(material, name))):
-            raise InputError(f"Material.{name}={getattr(material, name)!r} is out of range "
-                             f"(allowed {allowed})")
-    if material.model not in MODELS:
-        raise InputError(f"Material.model={material.model!r}; allowed {', '.join(MODELS)}")
+    """Raise :class:`InputError` naming the first out-of-range field of ``material``.
+
+    The ranges are the declarations of :mod:`demseis.parameters` (the ones a config is checked
+    against when it is loaded).
+    """
+    for field, name in MATERIAL_FIELDS.items():
+        PARAMS[name].check_value(getattr(material, field), f"Material.{field}", InputError)
 
 
 class Engine:

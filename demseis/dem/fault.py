@@ -37,13 +37,13 @@ from demseis.dem.engine import Engine, time_step, validate_material
 from demseis.dem.types import Material, NormalFault
 from demseis.types import Snapshot
 from demseis.errors import InputError
+from demseis.parameters import PARAMS
 
 
 def validate_fault(fault: NormalFault, width_m: float) -> None:
     """Raise :class:`InputError` naming the first bad field of ``fault``."""
     check_fault_fields("NormalFault", fault, width_m)
-    if not (math.isfinite(fault.speed_m_s) and 0 < fault.speed_m_s <= 100):
-        raise InputError(f"NormalFault.speed_m_s={fault.speed_m_s} is out of range (0, 100]")
+    PARAMS["wall_speed_m_s"].check_value(fault.speed_m_s, "NormalFault.speed_m_s", InputError)
 
 
 def save_snapshots(path: str, snaps: list[Snapshot]) -> None:

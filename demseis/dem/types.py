@@ -10,10 +10,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from demseis.parameters import MATERIAL_FIELDS, PARAMS
+
+
+def _default(field: str) -> object:
+    return PARAMS[MATERIAL_FIELDS.get(field, field)].default
+
 
 @dataclass(frozen=True)
 class Material:
     """Mechanical parameters of the elements and their contacts (SI units).
+
+    Defaults and allowed ranges are declared once in :mod:`demseis.parameters` (``demseis
+    params``); :func:`demseis.dem.engine.validate_material` checks against them.
 
     Attributes
     ----------
@@ -37,15 +46,15 @@ class Material:
     gravity_m_s2 : gravitational acceleration.
     """
 
-    density_kg_m3: float = 2500.0
-    kn_n_m: float = 1.0e10
-    ks_ratio: float = 0.5
-    friction: float = 0.4
-    cohesion_n: float = 5.0e7
-    bond_strain: float = 0.02
-    model: str = "frictional"
-    damping_scale: float = 3.0e8
-    gravity_m_s2: float = 9.81
+    density_kg_m3: float = _default("density_kg_m3")
+    kn_n_m: float = _default("kn_n_m")
+    ks_ratio: float = _default("ks_ratio")
+    friction: float = _default("friction")
+    cohesion_n: float = _default("cohesion_n")
+    bond_strain: float = _default("bond_strain")
+    model: str = _default("model")
+    damping_scale: float = _default("damping_scale")
+    gravity_m_s2: float = _default("gravity_m_s2")
 
 
 @dataclass(frozen=True)
@@ -63,10 +72,10 @@ class NormalFault:
     """
 
     x_m: float = 2500.0
-    dip_deg: float = 45.0
-    throw_m: float = 450.0
-    dip_direction: str = "right"
-    speed_m_s: float = 5.0
+    dip_deg: float = _default("dip_deg")
+    throw_m: float = _default("throw_m")
+    dip_direction: str = _default("dip_direction")
+    speed_m_s: float = _default("wall_speed_m_s")
 
 
 #: A brittle cover, calibrated at seed scale (5 km x 2.77 km, 45 deg, 450 m throw): bonds

@@ -7,8 +7,9 @@ frequencies and noise levels without re-running the DEM.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 import dataclasses
+import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -16,32 +17,36 @@ import numpy as np
 
 from demseis.dem.types import Material, NormalFault
 from demseis.types import Snapshot
-from demseis.generator.config import _MATERIAL_FIELDS, Config, _property_params, all_params
-from demseis.generator.sampling import RunSpec, plan_run, rng_at, seed_sequence
+from demseis.datasets.store import DEFAULT_ARRAYS, SAMPLE_ARRAYS
+from demseis.generator.config import Config
+from demseis.generator.sampling import (
+    SEED_DEM,
+    SEED_FAULTS,
+    SEED_LAYERS,
+    SEED_PROPERTIES,
+    Render,
+    RunSpec,
+    plan_run,
+    rng_at,
+    seed_sequence,
+)
+from demseis.parameters import MATERIAL_FIELDS, PARAMS, PROPERTY_FIELDS, SCENARIO, STORED
 from demseis.types import Grid
 
 #: integer codes of string parameters in the store (``params/<name>`` holds the index)
 PARAM_CODES: dict[str, tuple[str, ...]] = {
     "noise_kind": ("white", "band"),
     "dip_direction": ("right", "left"),
-    "contact_model": ("frictional", "bonded", "brittle"),
-    "structure": ("single", "domino", "graben", "horst", "half_graben"),
-    "fault_kind": ("normal", "reverse", "listric"),
+    "contact_model": PARAMS["contact_model"].choices,
+    "imaging": ("1d", "psf"),
+    "structure": PARAMS["structure"].choices,
+    "fault_kind": PARAMS["fault_kind"].choices,
 }
 
-#: per-sample record of the basement faults: ``fault<k>_<field>`` for k < MAX_FAULTS (-1 in
-#: every field where a run has fewer faults: the store holds no NaN); kind codes index
-#: PARAM_CODES["fault_kind"], direction codes PARAM_CODES["dip_direction"].
+#: value of every ``fault<k>_*`` record of a fault a run does not have (the store holds no
+#: NaN); kind codes index PARAM_CODES["fault_kind"], direction codes
+#: PARAM_CODES["dip_direction"] (declared in demseis.parameters.STORED).
 ABSENT = -1.0
-FAULT_FIELDS = ("kind", "x_m", "dip_deg", "throw_m", "throw_target_m", "dip_direction")
-
-SAMPLE_ARRAYS: dict[str, str] = {
-    "seismic": "float32",
-    "fault": "uint8",
-    "damage": "uint8",
-    "strain": "float32",
-    "layer": "int16",
-}
 
 
 def grid_of(cfg: Config) -> Grid:
@@ -75,34 +80,15 @@ def sample_shape(cfg: Config) -> tuple[int, int]:
 
 def array_dtypes(cfg: Config) -> dict[str, str]:
     """Name → dtype of the per-sample arrays this config stores."""
-    out = dict(SAMPLE_ARRAYS)
-    if cfg.output.impedance:
-        out["impedance"] = "float32"
+    names = DEFAULT_ARRAYS + (("impedance",) if cfg.output.impedance else ())
+    out = {name: str(SAMPLE_ARRAYS[name]) for name in names}
     return out
 
 
 def param_dtypes() -> dict[str, str]:
     """Name → dtype of the per-sample parameter arrays (``params/`` in the store)."""
-    out = {
-        "run_id": "int32",
-        "sample_in_run": "int32",
-        "snapshot": "int16",
-        "step": "int64",
-        "throw_m": "float32",
-        "throw_target_m": "float32",
-        "fault_x_m": "float32",
-        "n_elements": "int32",
-        "freq_hz": "float32",
-        "snr_db": "float32",
-        "noise_seed": "uint64",
-        "n_basement_faults": "int8",
-    }
-    from demseis.dem.basement import MAX_FAULTS
-
-    for k in range(MAX_FAULTS):
-        for f in FAULT_FIELDS:
-            out[f"fault{k}_{f}"] = "int8" if f in ("kind", "dip_direction") else "float32"
-    for key, pdef in all_params().items():
+    out = {s.name: s.dtype for s in STORED}
+    for key, pdef in SCENARIO.items():
         if key in out:
             continue
         if key in PARAM_CODES:
@@ -159,7 +145,7 @@ def fault_system_of(cfg: Config, params: dict[str, Any], run: int) -> Any:
     else:
         if kind == "listric" and structure != "half_graben":
             kind = "normal"  # a listric fault must bound an end block: only half-grabens
-        system = draw_fault_system(rng_at(cfg, run, 6), W, structure=structure,
+        system = draw_fault_system(rng_at(cfg, run, SEED_FAULTS), W, structure=structure,
                                    n_faults=int(params["n_faults"]), kind=kind,
                                    dip_deg=float(params["dip_deg"]),
                                    throw_m=float(params["throw_m"]),
@@ -205,14 +191,14 @@ def fault_throws_of(info: dict[str, Any], snapshot: int, n_snapshots: int) -> di
 
 def material_of(params: dict[str, Any]) -> Material:
     """The DEM material of a run."""
-    return Material(**{field: params[key] for key, field in _MATERIAL_FIELDS.items()})
+    return Material(**{field: params[key] for field, key in MATERIAL_FIELDS.items()})
 
 
 def property_model_of(cfg: Config, params: dict[str, Any]) -> Any:
     """The rock-property model of a run (scalar fields from the run's parameters)."""
     from demseis.seismic import PropertyModel
 
-    scalar = {p.name: params[p.name] for p in _property_params()}
+    scalar = {name: params[name] for name in PROPERTY_FIELDS}
     return PropertyModel(**cfg.properties, **scalar)
 
 
@@ -225,10 +211,10 @@ def simulate_run(
     p = spec.params
     material = material_of(p)
     thick = layer_thicknesses(cfg, int(p["n_layers"]), float(p["layer_thickness_cv"]),
-                              rng_at(cfg, spec.run, 4))
+                              rng_at(cfg, spec.run, SEED_LAYERS))
     info = run_info(cfg, p, spec.run)
     fault = fault_system_of(cfg, p, spec.run)
-    rng = rng_at(cfg, spec.run, 1)
+    rng = rng_at(cfg, spec.run, SEED_DEM)
     asm = build_assembly(
         cfg.model.width_m, cfg.model.height_m,
         radius_min_m=cfg.model.radius_min_m, radius_max_m=cfg.model.radius_max_m,
@@ -241,7 +227,7 @@ def simulate_run(
 
         model = property_model_of(cfg, p)
         # the same draw as render_run's (the first layers do not depend on the total)
-        lith = draw_layer_properties(int(p["n_layers"]), model, rng_at(cfg, spec.run, 2)).lithology
+        lith = draw_layer_properties(int(p["n_layers"]), model, rng_at(cfg, spec.run, SEED_PROPERTIES)).lithology
         layers = layer_materials([model.lithologies[k] for k in lith], material,
                                  float(p["strength_contrast"]))
     # uplift (reverse and listric faults) is eroded at the top of the sample grid
@@ -252,6 +238,19 @@ def simulate_run(
                      erosion_level_m=cfg.model.height_m if uplift else None,
                      layer_materials=layers)
     return snaps, info
+
+
+def run_properties(cfg: Config, run: int, model: Any, n_layers_total: int) -> tuple[Any, int]:
+    """The per-layer rock properties of run ``run`` and its per-element scatter seed.
+
+    Both come from the run's ``SEED_PROPERTIES`` node, so every snapshot (and a re-render or a
+    preview) gets the same rock.
+    """
+    from demseis.seismic import draw_layer_properties
+
+    layer_props = draw_layer_properties(n_layers_total, model, rng_at(cfg, run, SEED_PROPERTIES))
+    elem_seed = int(seed_sequence(cfg, run, SEED_PROPERTIES).generate_state(2, dtype=np.uint64)[1])
+    return layer_props, elem_seed
 
 
 @dataclass(frozen=True)
@@ -269,18 +268,16 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
     from demseis.seismic import (
         add_noise,
         depth_to_time,
-        draw_layer_properties,
         element_properties,
+        imaged_sections,
         property_grids,
-        synthetic_sections,
     )
 
     grid = grid_of(cfg)
     p = spec.params
     model = property_model_of(cfg, p)
     n_layers_total = max(int(s.layer.max()) for s in snapshots) + 1
-    layer_props = draw_layer_properties(n_layers_total, model, rng_at(cfg, spec.run, 2))
-    elem_seed = int(seed_sequence(cfg, spec.run, 2).generate_state(2, dtype=np.uint64)[1])
+    layer_props, elem_seed = run_properties(cfg, spec.run, model, n_layers_total)
     history = strain_history(snapshots, cfg.labels)
 
     dtypes = array_dtypes(cfg)
@@ -298,18 +295,25 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
         vp_e, rho_e = element_properties(snap.ids, snap.layer, layer_props, model, elem_seed)
         vp_g, rho_g = property_grids(snap.xy, snap.radius, vp_e, rho_e, snap.layer, grid, model)
         maps = dict(label_maps(snap, history[k], grid, cfg.labels))
-        freqs = sorted({r.freq_hz for r in renders})
         impedance = vp_g * rho_g
-        if t_s is None:
-            sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs)
-        else:
-            sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs, domain="time", t_s=t_s)
+        domain = "depth" if t_s is None else "time"
+        # one imaging call per (imaging, angle, aperture), all its frequencies at once
+        wanted: dict[tuple[str, float, float], set[float]] = {}
+        for r in renders:
+            wanted.setdefault(_imaging_key(r), set()).add(r.freq_hz)
+        images = {}
+        for key, fset in wanted.items():
+            freqs = sorted(fset)
+            secs = imaged_sections(key[0], vp_g, rho_g, grid.cell_m, freqs, domain, t_s=t_s,
+                                   max_angle_deg=key[1], aperture_m=key[2])
+            images.update({(key, f): sec for f, sec in zip(freqs, secs)})
+        if t_s is not None:
             fills = {"fault": 0, "damage": 0, "strain": 0.0, "layer": -1}
             for name, fill in fills.items():
                 maps[name] = depth_to_time(maps[name], vp_g, grid.cell_m, t_s, method="nearest", fill=fill)
             impedance = depth_to_time(impedance, vp_g, grid.cell_m, t_s, method="nearest", fill=0.0)
         for r in renders:
-            clean = sections[freqs.index(r.freq_hz)]
+            clean = images[(_imaging_key(r), r.freq_hz)]
             noisy = add_noise(clean, r.snr_db, r.noise_kind, np.random.default_rng(r.seed))
             i = r.sample
             arrays["seismic"][i] = noisy
@@ -323,6 +327,8 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
                 "run_id": spec.run, "sample_in_run": i, "snapshot": k, "step": snap.step,
                 "throw_m": snap.throw_m, "n_elements": snap.n, "freq_hz": r.freq_hz,
                 "snr_db": r.snr_db, "noise_seed": r.seed, "noise_kind": r.noise_kind,
+                "imaging": r.imaging, "psf_max_angle_deg": r.psf_max_angle_deg,
+                "psf_aperture_m": r.psf_aperture_m,
                 **{k: v for k, v in info.items() if not k.startswith("_")},
                 **fault_throws_of(info, k, len(snapshots)),
             }
@@ -331,6 +337,13 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
                     value = PARAM_CODES[key].index(value)
                 params[key][i] = value
     return ShardData(arrays=arrays, params=params, snapshots=snapshots)
+
+
+def _imaging_key(r: Render) -> tuple[str, float, float]:
+    """Renders sharing this key share one imaging call (the angle matters only for the PSF)."""
+    if r.imaging == "1d":
+        return ("1d", 90.0, math.inf)
+    return (r.imaging, r.psf_max_angle_deg, r.psf_aperture_m if r.psf_aperture_m > 0 else math.inf)
 
 
 def run_shard(cfg: Config, run: int, progress: Callable[[float], None] | None = None) -> ShardData:

@@ -16,23 +16,47 @@ from demseis.generator.sweep import SweepSummary, _progress_bar, prepare_store
 
 
 def rerender_config(source_cfg: dict[str, Any], freqs_hz: list[float], snrs_db: list[float],
-                    noise_kind: str) -> Config:
-    """The source config with its render parameters replaced (run parameters unchanged)."""
+                    noise_kind: str, imaging: list[str] | None = None,
+                    psf_max_angles_deg: list[float] | None = None,
+                    psf_aperture_m: float | None = None) -> Config:
+    """The source config with its render parameters replaced (run parameters unchanged).
+
+    ``imaging``, ``psf_max_angles_deg`` and ``psf_aperture_m`` replace the source's values
+    when given (lists become grids: every snapshot is rendered at each); None keeps them.
+    """
     raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in source_cfg.items()}
     raw["sweep"] = dict(raw["sweep"])
     raw["sweep"]["freq_hz"] = [f for f in freqs_hz]
     raw["sweep"]["snr_db"] = ["inf" if math.isinf(s) else s for s in snrs_db]
     raw["sweep"]["noise_kind"] = noise_kind
+    if imaging is not None:
+        raw["sweep"]["imaging"] = list(imaging)
+    if psf_max_angles_deg is not None:
+        raw["sweep"]["psf_max_angle_deg"] = list(psf_max_angles_deg)
+    if psf_aperture_m is not None:
+        raw["sweep"]["psf_aperture_m"] = psf_aperture_m
     raw["sweep"]["renders_per_snapshot"] = 1
     raw["name"] = f"{source_cfg.get('name', 'demseis')}-render"
     return parse_config(raw, source="re-render config")
 
 
-def rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snrs_db: list[float],
-             noise_kind: str = "white", overwrite: bool = False, progress: bool = True) -> SweepSummary:
+def rerender(source: str | Path, out: str | Path, **options: Any) -> SweepSummary:
+    """Write a new store with every done run of ``source`` re-rendered, holding ``out``'s
+    writer lock (options: those of :func:`_rerender`)."""
+    from demseis.datasets import writer_lock
+
+    with writer_lock(out, "demseis render"):
+        return _rerender(source, out, **options)
+
+
+def _rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snrs_db: list[float],
+              noise_kind: str = "white", imaging: list[str] | None = None,
+              psf_max_angles_deg: list[float] | None = None, psf_aperture_m: float | None = None,
+              overwrite: bool = False, progress: bool = True) -> SweepSummary:
     """Write a new store with every done run of ``source`` re-rendered.
 
-    Runs that are not done in the source are recorded as failed in the new store.
+    Runs that are not done in the source are recorded as failed in the new store. The
+    imaging options (see :func:`rerender_config`) default to the source's.
     """
     import time
 
@@ -50,7 +74,8 @@ def rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snrs
     root = open_store(src)
     if Path(out).resolve() == src.resolve():
         raise StoreError("--out must differ from the source store")
-    cfg = rerender_config(dict(root.attrs)["config"], freqs_hz, snrs_db, noise_kind)
+    cfg = rerender_config(dict(root.attrs)["config"], freqs_hz, snrs_db, noise_kind, imaging,
+                          psf_max_angles_deg, psf_aperture_m)
     src_status = shard_status(src)
     status = prepare_store(cfg, out, overwrite=overwrite)
     pending = [int(i) for i in np.flatnonzero(status != 1)]

@@ -8,14 +8,15 @@ import numpy as np
 import pytest
 
 from demseis.dem import NormalFault
-from demseis.generator.config import all_params, load_config, parse_config
+from demseis.generator.config import load_config, parse_config
 from demseis.generator.pipeline import (PARAM_CODES, fault_system_of, param_dtypes, render_run,
                                         run_info, simulate_run)
 from demseis.generator.sampling import plan_run
+from demseis.parameters import PARAMS
 
 
 def test_new_parameters_are_declared_once_with_range_and_doc():
-    p = all_params()
+    p = PARAMS
     for name in ("structure", "n_faults", "fault_kind", "fault_spacing_frac",
                  "listric_radius_m", "strength_contrast"):
         assert p[name].doc
