@@ -31,6 +31,8 @@ from demseis.errors import ConfigError, DemseisError
 
 INF = math.inf
 LEVELS = ("sweep", "run", "sample")
+#: most basement faults of a fault system (demseis.dem.basement)
+MAX_BASEMENT_FAULTS = 5
 
 
 @dataclass(frozen=True)
@@ -164,6 +166,24 @@ _DECLARED: tuple[Param, ...] = (
        doc="x where the basement fault meets the model base, as a fraction of the width"),
     _p("dip_direction", str, "run", "right", choices=("right", "left"),
        doc="side of the hanging wall"),
+    # ---- per run: fault systems (demseis.dem.basement; "single" + "normal" is the fault above)
+    _p("structure", str, "run", "single",
+       choices=("single", "domino", "graben", "horst", "half_graben"),
+       doc="basement structure: one fault, a domino (synthetic) set, graben, horst, or "
+           "half-graben (one listric fault); dip_deg and throw_m apply to every fault"),
+    _p("n_faults", int, "run", 1, 1, MAX_BASEMENT_FAULTS,
+       doc="faults of a domino set (graben and horst have 2, the others 1)"),
+    _p("fault_kind", str, "run", "normal", choices=("normal", "reverse", "listric"),
+       doc="kind of the faults of single/domino/graben/horst (a half-graben is listric; a "
+           "listric fault must bound an end block, so a listric domino/graben/horst is normal)"),
+    _p("fault_spacing_frac", float, "run", 0.2, 0.08, 0.4,
+       doc="domino fault spacing, or graben/horst width, as a fraction of the model width"),
+    _p("listric_radius_m", float, "run", 5000.0, 1500.0, 20000.0, unit="m",
+       doc="radius of curvature of a listric fault (its throw is capped at 80% of the arc's "
+           "depth)"),
+    _p("strength_contrast", float, "run", 1.0, 1.0, 16.0,
+       doc="mechanical stratigraphy: cohesion ratio of strong (sandstone, limestone) to weak "
+           "(shale) layers; 1 = uniform mechanics (demseis.dem.strata)"),
     # ---- per run: layering ---------------------------------------------------------------
     _p("n_layers", int, "run", 48, 1, 250, doc="number of pre-kinematic layers"),
     _p("layer_thickness_cv", float, "run", 0.0, 0.0, 0.9,
@@ -172,15 +192,16 @@ _DECLARED: tuple[Param, ...] = (
     _p("density_kg_m3", float, "run", 2500.0, 500.0, 6000.0, unit="kg/m^3",
        doc="element density; mass = density * pi r^2 (unit thickness)"),
     _p("kn_n_m", float, "run", 1.0e10, 1.0e6, 1.0e13, unit="N/m",
-       doc="normal contact stiffness Kn"),
+       doc="normal contact stiffness Kn (dt ~ Kn^-1/2: 4e10 doubles a run's cost, 1e13 ~30x)"),
     _p("ks_ratio", float, "run", 0.5, 0.0, 2.0, lo_open=True, doc="shear stiffness Ks / Kn"),
     _p("friction", float, "run", 0.4, 0.0, 2.0,
        doc="contact friction coefficient mu (slider |Fs| <= C0 + mu Fn)"),
     _p("cohesion_n", float, "run", 5.0e7, 0.0, 1.0e12, unit="N", doc="contact cohesion C0"),
     _p("bond_strain", float, "run", 0.02, 1.0e-5, 1.0, hi_open=True,
        doc="bond-breaking strain r0: a bond breaks when d - R > r0 R"),
-    _p("contact_model", str, "run", "frictional", choices=("frictional", "bonded"),
-       doc="frictional-cohesive (all bonds start broken) or bonded (initial neighbours)"),
+    _p("contact_model", str, "run", "frictional", choices=("frictional", "bonded", "brittle"),
+       doc="frictional-cohesive (cohesion heals: ductile), bonded (tensile bonds), or brittle "
+           "(bonds broken by tension or shear, cohesion lost with them: faults localise)"),
     _p("damping_scale", float, "run", 3.0e8, 0.0, 1.0e13, unit="N s/m per s",
        doc="global viscous damping eta = dt * damping_scale"),
     _p("gravity_m_s2", float, "run", 9.81, 0.0, 100.0, unit="m/s^2", doc="gravity"),
@@ -276,6 +297,19 @@ STORED: tuple[Stored, ...] = (
     Stored("fault_x_m", "float32", "run", "m", "x where the basement fault meets the base"),
     Stored("n_elements", "int32", "snapshot", "", "elements in the snapshot (deposits included)"),
     Stored("noise_seed", "uint64", "sample", "", "seed of the sample's noise Generator"),
+    Stored("n_basement_faults", "int8", "run", "", "basement faults of the run (1-5)"),
+) + tuple(
+    Stored(f"fault{k}_{field}", dtype, level, unit, f"basement fault {k} (by x): {doc}; -1 if "
+           "the run has fewer faults")
+    for k in range(MAX_BASEMENT_FAULTS)
+    for field, dtype, level, unit, doc in (
+        ("kind", "int8", "run", "", "kind code (0 normal, 1 reverse, 2 listric)"),
+        ("x_m", "float32", "run", "m", "x where it meets the top of the basement"),
+        ("dip_deg", "float32", "run", "deg", "dip at the top of the basement"),
+        ("dip_direction", "int8", "run", "", "dip direction code (0 right, 1 left)"),
+        ("throw_target_m", "float32", "run", "m", "final throw"),
+        ("throw_m", "float32", "snapshot", "m", "throw reached at the snapshot"),
+    )
 )
 
 

@@ -37,7 +37,7 @@ def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot], dict[st
             raise InputError(f"--run {run} is not done in store {source!r}")
         snaps = read_particles(path, run)
         p = plan_run(cfg, run).params
-        info = run_info(cfg, p)
+        info = run_info(cfg, p, run)
         return cfg, snaps, info
     if source in PRESETS:
         cfg = load_config(preset=source)

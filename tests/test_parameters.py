@@ -83,7 +83,10 @@ STAGE = {
 #: numeric parameters only the generator consumes (its config checks are the only ones)
 GENERATOR_ONLY = {"seed", "n_runs", "renders_per_snapshot", "fault_x_frac", "n_layers",
                   "layer_thickness_cv", "width_m", "height_m", "radius_min_m", "radius_max_m",
-                  "n_snapshots", "dt_s"}
+                  "n_snapshots", "dt_s",
+                  # fault systems and mechanical stratigraphy: the generator turns them into a
+                  # FaultSystem / per-layer materials, whose own checks are wider
+                  "n_faults", "fault_spacing_frac", "listric_radius_m", "strength_contrast"}
 NUMERIC = sorted(k for k, p in PARAMS.items() if p.kind in (int, float))
 
 

@@ -34,8 +34,11 @@ class Material:
         5e7 N is ~10% of mu * Fn at 1 km depth: brittle near the surface, frictional at depth;
         with C0 = 0 a 45 deg basement fault only makes a broad monocline (docs/dem.md).
     bond_strain : bond-breaking strain r0 (bond breaks when d - R > r0 * R).
-    model : ``"frictional"`` (all bonds start broken) or ``"bonded"`` (bonds between initial
-        neighbours).
+    model : ``"frictional"`` (all bonds start broken; every contact, new or old, carries C0:
+        cohesion heals, so deformation stays distributed: the ductile end), ``"bonded"``
+        (tensile bonds between initial neighbours) or ``"brittle"`` (bonds between initial
+        neighbours that break in tension at r0 or in shear at C0 + mu Fn; C0 lives only on
+        the bonds, new contacts are frictional: strain softening that localises slip).
     damping_scale : global viscous damping eta = dt * damping_scale (N s / m per second of dt).
         The paper's 3.0e9 makes the terminal sinking speed of the smallest element (m g / eta,
         ~1.4 m/s at Kn = 1e10) slower than the basement subsides, so the hanging wall detaches
@@ -73,3 +76,10 @@ class NormalFault:
     throw_m: float = _default("throw_m")
     dip_direction: str = _default("dip_direction")
     speed_m_s: float = _default("wall_speed_m_s")
+
+
+#: A brittle cover, calibrated at seed scale (5 km x 2.77 km, 45 deg, 450 m throw): bonds
+#: between touching neighbours that break in tension (r0 = 0.005) or shear (C0 = 1.4e9 N +
+#: mu Fn), cohesion lost with them. The mid-depth horizon steps 299 m (0.66 of the throw)
+#: within 100 m across a ~70 deg master fault (docs/dem.md). ``Material()`` is the ductile end.
+BRITTLE = Material(model="brittle", cohesion_n=1.4e9, bond_strain=0.005)

@@ -42,7 +42,7 @@ from demseis.generator.params import (
 )
 from demseis.parameters import PARAMS, PROPERTY_FIELDS, SCENARIO, Param
 
-PRESETS = ("tiny", "quick", "seed")
+PRESETS = ("tiny", "quick", "seed", "variety")
 
 
 def _section(name: str) -> dict[str, Param]:

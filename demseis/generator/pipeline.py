@@ -7,6 +7,7 @@ frequencies and noise levels without re-running the DEM.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -20,6 +21,7 @@ from demseis.datasets.store import DEFAULT_ARRAYS, SAMPLE_ARRAYS
 from demseis.generator.config import Config
 from demseis.generator.sampling import (
     SEED_DEM,
+    SEED_FAULTS,
     SEED_LAYERS,
     SEED_PROPERTIES,
     Render,
@@ -28,16 +30,24 @@ from demseis.generator.sampling import (
     rng_at,
     seed_sequence,
 )
-from demseis.parameters import MATERIAL_FIELDS, PROPERTY_FIELDS, SCENARIO, STORED
+from demseis.parameters import MATERIAL_FIELDS, PARAMS, PROPERTY_FIELDS, SCENARIO, STORED
 from demseis.types import Grid
 
 #: integer codes of string parameters in the store (``params/<name>`` holds the index)
 PARAM_CODES: dict[str, tuple[str, ...]] = {
     "noise_kind": ("white", "band"),
     "dip_direction": ("right", "left"),
-    "contact_model": ("frictional", "bonded"),
+    "contact_model": PARAMS["contact_model"].choices,
     "imaging": ("1d", "psf"),
+    "structure": PARAMS["structure"].choices,
+    "fault_kind": PARAMS["fault_kind"].choices,
 }
+
+#: value of every ``fault<k>_*`` record of a fault a run does not have (the store holds no
+#: NaN); kind codes index PARAM_CODES["fault_kind"], direction codes
+#: PARAM_CODES["dip_direction"] (declared in demseis.parameters.STORED).
+ABSENT = -1.0
+
 
 def grid_of(cfg: Config) -> Grid:
     """The raster grid shared by every sample of a sweep."""
@@ -113,15 +123,70 @@ def layer_thicknesses(cfg: Config, n_layers: int, cv: float, rng: np.random.Gene
     return h
 
 
-def run_info(cfg: Config, params: dict[str, Any]) -> dict[str, Any]:
-    """Derived per-run values stored with every sample: the fault's x at the base, the target throw.
+def fault_system_of(cfg: Config, params: dict[str, Any], run: int) -> Any:
+    """The basement of a run: a NormalFault for ``structure="single"`` + ``fault_kind="normal"``
+    (today's model, placed by ``fault_x_frac``), else a :class:`demseis.dem.FaultSystem`."""
+    from demseis.dem.basement import BasementFault, FaultSystem, draw_fault_system
 
-    ``fault_x_frac`` places the basement fault where it meets the base of the model. The fault
-    that grows through the cover is usually steeper than the basement fault (it is not
+    W = cfg.model.width_m
+    structure, kind = str(params["structure"]), str(params["fault_kind"])
+    if structure == "single" and kind == "normal":
+        return NormalFault(x_m=float(params["fault_x_frac"]) * W, dip_deg=float(params["dip_deg"]),
+                           throw_m=float(params["throw_m"]),
+                           dip_direction=str(params["dip_direction"]),
+                           speed_m_s=cfg.model.wall_speed_m_s)
+    if structure == "single":
+        f = BasementFault(float(params["fault_x_frac"]) * W, float(params["dip_deg"]),
+                          float(params["throw_m"]), str(params["dip_direction"]), kind,
+                          float(params["listric_radius_m"]))
+        if kind == "listric":
+            f = dataclasses.replace(f, throw_m=min(f.throw_m, f.max_listric_throw_m))
+        system = FaultSystem((f,), structure="single")
+    else:
+        if kind == "listric" and structure != "half_graben":
+            kind = "normal"  # a listric fault must bound an end block: only half-grabens
+        system = draw_fault_system(rng_at(cfg, run, SEED_FAULTS), W, structure=structure,
+                                   n_faults=int(params["n_faults"]), kind=kind,
+                                   dip_deg=float(params["dip_deg"]),
+                                   throw_m=float(params["throw_m"]),
+                                   spacing_frac=float(params["fault_spacing_frac"]),
+                                   listric_radius_m=float(params["listric_radius_m"]),
+                                   dip_direction=str(params["dip_direction"]))
+    return dataclasses.replace(system, speed_m_s=cfg.model.wall_speed_m_s)
+
+
+def run_info(cfg: Config, params: dict[str, Any], run: int) -> dict[str, Any]:
+    """Derived per-run values stored with every sample: the master fault's x at the base and
+    target throw, and every basement fault (kind, x, dip, target throw, direction).
+
+    ``fault_x_frac`` places a single basement fault where it meets the base of the model. The
+    fault that grows through the cover is usually steeper than the basement fault (it is not
     imposed), so its trace at the surface lies on the footwall side of that point.
     """
-    return {"fault_x_m": float(params["fault_x_frac"]) * cfg.model.width_m,
-            "throw_target_m": float(params["throw_m"])}
+    from demseis.dem.fault import as_system
+
+    system = as_system(fault_system_of(cfg, params, run))
+    m = system.faults[system.master]
+    info: dict[str, Any] = {"fault_x_m": m.x_m, "throw_target_m": m.throw_m,
+                            "n_basement_faults": len(system.faults)}
+    for k in range(5):
+        f = system.faults[k] if k < len(system.faults) else None
+        info[f"fault{k}_kind"] = PARAM_CODES["fault_kind"].index(f.kind) if f else -1
+        info[f"fault{k}_dip_direction"] = (PARAM_CODES["dip_direction"].index(f.dip_direction)
+                                           if f else -1)
+        info[f"fault{k}_x_m"] = f.x_m if f else ABSENT
+        info[f"fault{k}_dip_deg"] = f.dip_deg if f else ABSENT
+        info[f"fault{k}_throw_target_m"] = f.throw_m if f else ABSENT
+        info[f"fault{k}_throw_m"] = ABSENT
+    info["_system"] = system
+    return info
+
+
+def fault_throws_of(info: dict[str, Any], snapshot: int, n_snapshots: int) -> dict[str, float]:
+    """``fault<k>_throw_m`` (throw so far) of every fault at snapshot ``snapshot``."""
+    system = info["_system"]
+    throws = system.throws_at(snapshot / (n_snapshots - 1))
+    return {f"fault{k}_throw_m": float(t) for k, t in enumerate(throws)}  # absent ones stay -1
 
 
 def material_of(params: dict[str, Any]) -> Material:
@@ -147,22 +212,31 @@ def simulate_run(
     material = material_of(p)
     thick = layer_thicknesses(cfg, int(p["n_layers"]), float(p["layer_thickness_cv"]),
                               rng_at(cfg, spec.run, SEED_LAYERS))
-    info = run_info(cfg, p)
-    fault = NormalFault(
-        x_m=info["fault_x_m"],
-        dip_deg=float(p["dip_deg"]),
-        throw_m=float(p["throw_m"]),
-        dip_direction=str(p["dip_direction"]),
-        speed_m_s=cfg.model.wall_speed_m_s,
-    )
+    info = run_info(cfg, p, spec.run)
+    fault = fault_system_of(cfg, p, spec.run)
     rng = rng_at(cfg, spec.run, SEED_DEM)
     asm = build_assembly(
         cfg.model.width_m, cfg.model.height_m,
         radius_min_m=cfg.model.radius_min_m, radius_max_m=cfg.model.radius_max_m,
         n_layers=int(p["n_layers"]), layer_thickness_m=thick, material=material, rng=rng,
     )
+    layers = None
+    if float(p["strength_contrast"]) > 1.0:
+        from demseis.dem.strata import layer_materials
+        from demseis.seismic import draw_layer_properties
+
+        model = property_model_of(cfg, p)
+        # the same draw as render_run's (the first layers do not depend on the total)
+        lith = draw_layer_properties(int(p["n_layers"]), model, rng_at(cfg, spec.run, SEED_PROPERTIES)).lithology
+        layers = layer_materials([model.lithologies[k] for k in lith], material,
+                                 float(p["strength_contrast"]))
+    # uplift (reverse and listric faults) is eroded at the top of the sample grid
+    uplift = not isinstance(fault, NormalFault) and any(
+        f.kind != "normal" for f in fault.faults)
     snaps = simulate(asm, fault, material, n_snapshots=cfg.model.n_snapshots,
-                     sedimentation=cfg.model.sedimentation, rng=rng, progress=progress)
+                     sedimentation=cfg.model.sedimentation, rng=rng, progress=progress,
+                     erosion_level_m=cfg.model.height_m if uplift else None,
+                     layer_materials=layers)
     return snaps, info
 
 
@@ -254,7 +328,9 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
                 "throw_m": snap.throw_m, "n_elements": snap.n, "freq_hz": r.freq_hz,
                 "snr_db": r.snr_db, "noise_seed": r.seed, "noise_kind": r.noise_kind,
                 "imaging": r.imaging, "psf_max_angle_deg": r.psf_max_angle_deg,
-                "psf_aperture_m": r.psf_aperture_m, **info,
+                "psf_aperture_m": r.psf_aperture_m,
+                **{k: v for k, v in info.items() if not k.startswith("_")},
+                **fault_throws_of(info, k, len(snapshots)),
             }
             for key, value in {**p, **row}.items():
                 if key in PARAM_CODES:

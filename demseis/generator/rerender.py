@@ -90,7 +90,7 @@ def _rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snr
             spec = plan_run(cfg, run)
             snaps = read_particles(src, run)
             p = spec.params
-            info = run_info(cfg, p)
+            info = run_info(cfg, p, run)
             data = render_run(cfg, spec, snaps, info)
             write_shard(out, run, data.arrays, data.params, data.snapshots)
             summary.completed.append(run)

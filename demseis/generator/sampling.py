@@ -8,6 +8,7 @@ Seed tree (spawn keys under the sweep seed; the second key is one of the named c
     (run, SEED_PROPERTIES)           rock properties (per-layer draws; per-element scatter seed)
     (run, SEED_RENDER, sample)       one sample's render draws and its noise seed
     (run, SEED_LAYERS)               layer thicknesses (``layer_thickness_cv > 0``)
+    (run, SEED_FAULTS)               placement of a fault system (``structure != "single"``)
 
 A run's values depend only on the sweep seed and the run index, never on worker count or order.
 """
@@ -29,6 +30,7 @@ SEED_DEM = 1
 SEED_PROPERTIES = 2
 SEED_RENDER = 3
 SEED_LAYERS = 4
+SEED_FAULTS = 6
 
 
 def seed_sequence(cfg: Config, *key: int) -> np.random.SeedSequence:
