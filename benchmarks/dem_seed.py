@@ -23,6 +23,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from demseis.dem import Material, NormalFault, build_assembly, settle_pack, simulate  # noqa
+from demseis.dem.fault import save_snapshots  # noqa
 
 
 def main(argv=None) -> int:
@@ -53,9 +54,7 @@ def main(argv=None) -> int:
            "total_wall_s": round(t2 - t0, 2), "total_cpu_s": round(c2 - c0, 2),
            "peak_rss_mib": round(peak_mib, 1), "cached_pack": args.cache_dir is not None}
     if args.save:
-        np.savez_compressed(args.save, **{f"{k}_{i}": getattr(s, k) for i, s in enumerate(snaps)
-                                          for k in ("ids", "xy", "radius", "layer", "deposited")},
-                            throw_m=np.array([s.throw_m for s in snaps]))
+        save_snapshots(args.save, snaps)
     if args.figure:
         from demseis.plotting import plot_snapshots
         plot_snapshots(snaps, args.figure, title=f"demseis DEM: {args.dip:.0f} deg normal fault, "

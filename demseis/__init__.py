@@ -1,17 +1,49 @@
 """demseis: labelled synthetic seismic from discrete-element fault models.
 
-Importing :mod:`demseis` is light: it does not import torch, dask or matplotlib.
-Subpackages:
+The front door (:mod:`demseis.api`)::
 
-- :mod:`demseis.dem`       2D discrete element model (Numba) and normal-fault boundary conditions
-- :mod:`demseis.seismic`   rock properties, rasterisation, impedance, reflectivity, wavelets, noise
-- :mod:`demseis.labels`    strain from element displacements, fault / damage / layer labels, scoring
-- :mod:`demseis.datasets`  sharded Zarr store, validation, PyTorch Dataset
-- :mod:`demseis.generator` config, scenario sampling, dask sweep, CLI
+    import demseis
+    store = demseis.generate("tiny", out="t.zarr")   # run a sweep -> demseis.Store
+    store = demseis.open("t.zarr")                   # samples, params, torch_dataset(), to_xarray()
+    result = demseis.score(pred, store)              # precision / recall / F1 / IoU / AP
+
+Importing :mod:`demseis` is light: it does not import torch, dask, matplotlib or even NumPy;
+the names above load on first use. Subpackages, in data-flow order:
+
+- :mod:`demseis.dem`        2D discrete element model (Numba) and normal-fault boundary conditions
+- :mod:`demseis.seismic`    rock properties, rasterisation, impedance, reflectivity, wavelets, noise
+- :mod:`demseis.labels`     strain from element displacements; fault, damage-zone and layer labels
+- :mod:`demseis.datasets`   the sharded Zarr store (every read and write), the PyTorch Dataset
+- :mod:`demseis.evaluation` scoring predictions against a store, a no-learning baseline
+- :mod:`demseis.generator`  config, scenario sampling, the dask sweep
+- :mod:`demseis.cli`        the ``demseis`` command
+- :mod:`demseis.parameters` every parameter declared once (``demseis params``)
+- :mod:`demseis.types`      the shared :class:`~demseis.types.Grid` and :class:`~demseis.types.Snapshot`
 """
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
 
 from demseis.errors import DemseisError
 
 __version__ = "0.1.0"
 
-__all__ = ["DemseisError", "__version__"]
+__all__ = ["DemseisError", "Store", "__version__", "generate", "open", "score"]
+
+_API = ("Store", "generate", "open", "score")
+
+if TYPE_CHECKING:  # pragma: no cover
+    from demseis.api import Store, generate, open, score  # noqa: A004
+
+
+def __getattr__(name: str) -> Any:
+    if name in _API:
+        from demseis import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'demseis' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_API))

@@ -14,8 +14,14 @@ import numpy as np
 from demseis.types import Snapshot
 from demseis.errors import ConfigError, InputError
 from demseis.generator.config import PRESETS, Config, load_config, parse_config
-from demseis.generator.pipeline import grid_of, property_model_of, run_info, simulate_run
-from demseis.generator.sampling import plan_run, rng_at, seed_sequence
+from demseis.generator.pipeline import (
+    grid_of,
+    property_model_of,
+    run_info,
+    run_properties,
+    simulate_run,
+)
+from demseis.generator.sampling import plan_run
 
 
 def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot], dict[str, Any]]:
@@ -31,7 +37,7 @@ def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot], dict[st
             raise InputError(f"--run {run} is not done in store {source!r}")
         snaps = read_particles(path, run)
         p = plan_run(cfg, run).params
-        info = run_info(cfg, p)
+        info = run_info(cfg, p, run)
         return cfg, snaps, info
     if source in PRESETS:
         cfg = load_config(preset=source)
@@ -85,7 +91,6 @@ def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
 
     from demseis.labels import label_maps, strain_history
     from demseis.seismic import (
-        draw_layer_properties,
         element_properties,
         property_grids,
         rasterise,
@@ -127,8 +132,7 @@ def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
     # Figure 3: particle Vp and density
     model = property_model_of(cfg, p)
     n_total = max(int(s.layer.max()) for s in snaps) + 1
-    layer_props = draw_layer_properties(n_total, model, rng_at(cfg, run, 2))
-    elem_seed = int(seed_sequence(cfg, run, 2).generate_state(2, dtype=np.uint64)[1])
+    layer_props, elem_seed = run_properties(cfg, run, model, n_total)
     last = snaps[-1]
     vp_e, rho_e = element_properties(last.ids, last.layer, layer_props, model, elem_seed)
     fig, axes = plt.subplots(1, 2, figsize=(13, 3.4))
@@ -203,21 +207,21 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from demseis.datasets import open_store
+    from demseis.datasets import open_store, read_sample
 
     root = open_store(store)
     n = root["seismic"].shape[0]
     if not 0 <= index < n:
         raise InputError(f"--sample {index}: the store has samples 0..{n - 1}")
-    attrs = dict(root.attrs)
-    grid = attrs["grid"]
-    codes = attrs.get("param_codes", {})
-    sec = np.asarray(root["seismic"][index])
-    fault = np.asarray(root["fault"][index])
-    damage = np.asarray(root["damage"][index])
-    p = {k: root["params"][k][index] for k in ("run_id", "snapshot", "dip_deg", "throw_m", "freq_hz",
-                                               "snr_db", "noise_kind")}
-    noise = codes.get("noise_kind", ["white", "band"])[int(p["noise_kind"])]
+    grid = dict(root.attrs)["grid"]
+    # StoreError naming the sample when it is damaged or its shard is not done
+    sample = read_sample(store, index, ("seismic", "fault", "damage"))
+    sec, fault, damage = (sample.arrays[k] for k in ("seismic", "fault", "damage"))
+    p = sample.params
+    noise = p["noise_kind"]
+    imaging = ""
+    if "imaging" in p:       # stores written before the PSF option have only 1-D
+        imaging = ", 1-D" if p["imaging"] == "1d" else f", PSF {float(p['psf_max_angle_deg']):g}°"
     w_m = grid["nx"] * grid["cell_m"]
     h_m = grid["nz"] * grid["cell_m"]
     extent = (0, w_m / 1000, h_m / 1000, 0)
@@ -226,7 +230,8 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
 
     fig, axes = plt.subplots(1, 3, figsize=(16, 1.3 + 16 / 3 * h_m / w_m), sharey=True, layout="constrained")
     axes[0].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect="equal")
-    axes[0].set_title(f"seismic: {float(p['freq_hz']):g} Hz, SNR {float(p['snr_db']):g} dB ({noise})")
+    axes[0].set_title(f"seismic: {float(p['freq_hz']):g} Hz, SNR {float(p['snr_db']):g} dB "
+                      f"({noise}){imaging}")
     axes[1].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect="equal")
     if "fault_id" in root:  # slip-trace labels: one colour per fault instance
         fid = np.asarray(root["fault_id"][index]).astype(float)

@@ -8,16 +8,19 @@ What it does:
 
 1. trains a 3-level U-Net (16-32-64 channels, ~120k parameters; the training loop is
    :func:`demseis.evaluation.train.train_unet`, shared with ``benchmarks/learnability.py``) on
-   random crops of the
-   ``train`` split of ``demseis.datasets.FaultSegDataset`` (seismic in, fault mask out) with
+   random crops of the ``train`` split of the store (seismic in, fault mask out) with
    binary cross-entropy (positive weight = background/fault pixel ratio, capped at 50) plus soft
    Dice, Adam, for a wall-clock budget;
 2. predicts fault probabilities on the whole sections of the ``test`` split (DEM runs never seen
    in training) and writes ``unet_test.npy`` with ``test_indices.npy`` (store index of each row);
 3. runs the no-learning baseline (``--baseline-method``, default ``dip``: coherence-weighted
    reflector dip; or ``semblance``) on the same test sections (``baseline_test.npy``);
-4. scores both with ``demseis score ... --indices test_indices.npy --by freq_hz,snr_db,dip_deg``
-   and prints the tables (CSV and JSON land next to the predictions).
+4. scores both with ``demseis.score(pred, store, indices=..., by=("freq_hz", "snr_db",
+   "dip_deg"))`` (what ``demseis score`` does) and prints the tables (CSV and JSON land next to
+   the predictions).
+
+It uses only the public API: ``demseis.open``, ``Store.torch_dataset``, ``demseis.score`` and
+the baseline of :mod:`demseis.evaluation`.
 
 Everything is seeded (``--seed``); on CPU, PyTorch's results are repeatable for a fixed thread
 count. The time budget makes the number of steps depend on the machine, so the script prints it.
@@ -27,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import shlex
 import sys
 
 import numpy as np
@@ -41,15 +43,21 @@ def train(args: argparse.Namespace) -> tuple[object, dict]:
                       base=args.base, lr=args.lr, seed=args.seed, threads=args.threads)
 
 
-def run_score(pred: str, store: str, indices: str, tolerance: float, by: str,
+def run_score(pred: str, store, indices: np.ndarray, tolerance: float, by: str,
               bins: int) -> int:
-    """``demseis score`` on predictions of the test samples (printed as a command line)."""
-    from demseis.cli import main
+    """Score predictions of the test samples; print the table, write CSV and JSON beside them."""
+    import demseis
 
-    argv = ["score", pred, store, "--indices", indices, "--tolerance", f"{tolerance:g}",
-            "--by", by, "--bins", str(bins)]
-    print("\n$ demseis " + " ".join(shlex.quote(a) for a in argv), flush=True)
-    return main(argv)
+    groups = tuple(s.strip() for s in by.split(",") if s.strip())
+    result = demseis.score(np.load(pred, mmap_mode="r"), store, indices=indices,
+                           tolerance_px=tolerance, by=groups, bins=bins)
+    print(f"\nscores of {pred} (tolerance {tolerance:g} px, {result.counts.n_samples} samples)")
+    print(result.table())
+    print(result.summary_line())
+    prefix = pred.removesuffix(".npy") + ".score"
+    print("wrote " + ", ".join(result.write(prefix, meta={"predictions": pred, "by": list(groups)})),
+          flush=True)
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -71,15 +79,16 @@ def main(argv: list[str] | None = None) -> int:
 
     import torch
 
-    from demseis.datasets import FaultSegDataset
-    from demseis.evaluation.baseline import baseline_fault_probability
+    import demseis
+    from demseis.evaluation import baseline_fault_probability
     from demseis.evaluation.train import predict_sections
 
     os.makedirs(args.out_dir, exist_ok=True)
     model, _ = train(args)
     torch.save(model.state_dict(), os.path.join(args.out_dir, "unet.pt"))
 
-    test = FaultSegDataset(args.store, inputs=("seismic",), targets=("fault",), split="test")
+    store = demseis.open(args.store)
+    test = store.torch_dataset(inputs=("seismic",), targets=("fault",), split="test")
     if len(test) == 0:
         raise SystemExit("the test split of the store is empty")
     seis = np.stack([test[i][0][0].numpy() for i in range(len(test))])
@@ -90,8 +99,8 @@ def main(argv: list[str] | None = None) -> int:
     base_path = os.path.join(args.out_dir, "baseline_test.npy")
     np.save(base_path, baseline_fault_probability(seis, args.baseline_method))
     print(f"\npredicted {len(test)} test sections ({len(np.unique(test.run_ids))} runs)")
-    rc = run_score(base_path, args.store, idx_path, args.tolerance, args.by, args.bins)
-    rc = rc or run_score(unet_path, args.store, idx_path, args.tolerance, args.by, args.bins)
+    rc = run_score(base_path, store, test.indices, args.tolerance, args.by, args.bins)
+    rc = rc or run_score(unet_path, store, test.indices, args.tolerance, args.by, args.bins)
     return rc
 
 

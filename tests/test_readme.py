@@ -5,9 +5,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import pytest
 
-from demseis.cli import build_parser, main
+from demseis.cli import build_parser
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 
@@ -16,17 +15,10 @@ def _blocks(lang: str) -> list[str]:
     return re.findall(rf"```{lang}\n(.*?)```", README.read_text(), flags=re.S)
 
 
-@pytest.fixture(scope="module")
-def tiny(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("readme") / "tiny.zarr"
-    assert main(["generate", "--preset", "tiny", "--out", str(out), "--workers", "0", "--quiet"]) == 0
-    return out
-
-
-def test_pytorch_snippet_runs(tiny):
+def test_pytorch_snippet_runs(tiny_store):
     (code,) = [b for b in _blocks("python") if "FaultSegDataset" in b]
     # the tiny store is 40 x 90 cells and has 2 runs: smaller crops, every run in one split
-    code = code.replace('"quick.zarr"', repr(str(tiny))).replace("crop=(96, 96)", "crop=(32, 32)")
+    code = code.replace('"quick.zarr"', repr(str(tiny_store))).replace("crop=(96, 96)", "crop=(32, 32)")
     code = code.replace('split="train", ', "")
     code = code.replace("    ...", "    seen.append((x.shape, y.shape, y.dtype))")
     scope: dict = {"seen": []}
@@ -43,3 +35,14 @@ def test_tour_commands_exist():
     tour = next(b for b in _blocks("bash") if "Five" in b or "demseis info" in b)
     used = {line.split()[1] for line in tour.splitlines() if line.startswith("demseis ")}
     assert used <= commands, used - commands
+
+
+def test_python_api_snippet_runs(tmp_path, monkeypatch, capsys):
+    (code,) = [b for b in _blocks("python") if "demseis.generate(" in b]
+    monkeypatch.chdir(tmp_path)
+    scope: dict = {}
+    exec(compile(code, "README.md", "exec"), scope)
+    out = capsys.readouterr().out
+    assert "<demseis.Store 'tiny.zarr'" in out and "snr_db" in out
+    assert scope["sample"]["seismic"].shape == scope["store"].layout.shape
+    assert scope["result"].overall.n_samples == len(scope["store"])

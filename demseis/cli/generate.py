@@ -1,5 +1,5 @@
-"""``demseis generate``, ``render`` and ``relabel``: write a dataset, re-render or relabel a store's
-snapshots."""
+"""``demseis generate``, ``render``, ``relabel`` and ``params``: write a dataset, re-render or
+relabel a store's snapshots, list the parameters a config may set."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from demseis.errors import InputError
 
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``generate``, ``render`` and ``relabel``."""
+    """Add ``generate``, ``render``, ``relabel`` and ``params``."""
     p = sub.add_parser(
         "generate",
         help="run a sweep and write a labelled dataset (resumes an interrupted one)",
@@ -18,7 +18,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
         "Rerunning the same command on an existing store completes only the missing shards.",
     )
     p.add_argument("config", nargs="?", help="TOML config file (default: the quick preset)")
-    p.add_argument("--preset", help="built-in preset: tiny, quick or seed (a CONFIG file overrides its keys)")
+    p.add_argument("--preset", help="built-in preset: tiny, quick, seed or variety (a CONFIG file overrides its keys)")
     p.add_argument("--out", required=True, help="output store path (a directory, e.g. data.zarr)")
     p.add_argument("--workers", type=nonneg_int, default=None,
                    help="worker processes (default: all cores; 0 = run in this process, no dask)")
@@ -34,6 +34,12 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.add_argument("--freq", required=True, help="comma-separated Ricker frequencies in Hz, e.g. 20,40,60")
     p.add_argument("--snr", default="inf", help="comma-separated SNRs in dB (inf = no noise), default inf")
     p.add_argument("--noise", default="white", choices=("white", "band"), help="noise kind")
+    p.add_argument("--imaging", help="comma-separated imaging: 1d, psf (2-D dip-limited PSF), or "
+                                     "both; default: the source store's")
+    p.add_argument("--psf-max-angle", help="comma-separated maximum illumination angles of the PSF "
+                                           "in degrees, e.g. 20,45; default: the source store's")
+    p.add_argument("--psf-aperture", help="survey half-aperture of the PSF in m (0 = no limit: "
+                                          "constant angle); default: the source store's")
     p.add_argument("--out", required=True, help="new store path")
     p.add_argument("--overwrite", action="store_true", help="replace --out if it is a demseis store")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -48,10 +54,18 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_relabel)
 
+    p = sub.add_parser("params", help="list every parameter: section, level, unit, range, default",
+                       description="Print the declared parameters (demseis.parameters): the "
+                       "config section, where each is drawn (sweep, run or sample), its unit, "
+                       "allowed range and default. docs/parameters.md holds the same table.")
+    p.add_argument("--markdown", action="store_true", help="print the Markdown table of the docs")
+    p.set_defaults(func=cmd_params)
+
 
 def cmd_generate(args: argparse.Namespace) -> int:
+    from demseis.api import generate
     from demseis.generator.config import load_config
-    from demseis.generator.sweep import dry_run_plan, run_sweep
+    from demseis.generator.sweep import dry_run_plan
 
     cfg = load_config(args.config, preset=args.preset)
     if args.dry_run:
@@ -59,10 +73,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
         return 0
     if args.workers is not None and args.scheduler is not None:
         raise InputError("give either --workers or --scheduler, not both")
-    summary = run_sweep(cfg, args.out, workers=args.workers, scheduler=args.scheduler,
-                        overwrite=args.overwrite, progress=not args.quiet)
-    print("\n".join(summary.lines()))
-    return 1 if summary.failed else 0
+    store = generate(cfg, out=args.out, workers=args.workers, scheduler=args.scheduler,
+                     overwrite=args.overwrite, progress=not args.quiet)
+    print("\n".join(store.run_summary.lines()))
+    return 1 if store.run_summary.failed else 0
 
 
 def _float_list(text: str, name: str) -> list[float]:
@@ -83,7 +97,26 @@ def cmd_render(args: argparse.Namespace) -> int:
 
     freqs = _float_list(args.freq, "--freq")
     snrs = _float_list(args.snr, "--snr")
+    imaging = None
+    if args.imaging is not None:
+        from demseis.parameters import PARAMS
+
+        allowed = PARAMS["imaging"].choices
+        imaging = [part.strip() for part in args.imaging.split(",")]
+        bad = [m for m in imaging if m not in allowed]
+        if bad:
+            raise InputError(f"--imaging {args.imaging!r}: {bad[0]!r} is not one of "
+                             + ", ".join(repr(c) for c in allowed))
+    angles = None if args.psf_max_angle is None else _float_list(args.psf_max_angle,
+                                                                  "--psf-max-angle")
+    aperture = None
+    if args.psf_aperture is not None:
+        vals = _float_list(args.psf_aperture, "--psf-aperture")
+        if len(vals) != 1:
+            raise InputError(f"--psf-aperture {args.psf_aperture!r}: give one value in m")
+        aperture = vals[0]
     summary = rerender(args.store, args.out, freqs_hz=freqs, snrs_db=snrs, noise_kind=args.noise,
+                       imaging=imaging, psf_max_angles_deg=angles, psf_aperture_m=aperture,
                        overwrite=args.overwrite, progress=not args.quiet)
     print("\n".join(summary.lines()))
     return 1 if summary.failed else 0
@@ -110,3 +143,10 @@ def cmd_relabel(args: argparse.Namespace) -> int:
                       overwrite=args.overwrite, progress=not args.quiet)
     print("\n".join(summary.lines()))
     return 1 if summary.failed else 0
+
+
+def cmd_params(args: argparse.Namespace) -> int:
+    from demseis.parameters import markdown_table, text_table
+
+    print(markdown_table() if args.markdown else text_table(), end="")
+    return 0

@@ -18,10 +18,11 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
     p = sub.add_parser(
         "validate",
-        help="check a demseis store (done shards complete, finite, labels in range)",
-        description="Check every done shard of a demseis store: complete, no NaN, label values "
-        "in range, consistent parameters. Exit 0 when fine, 1 with the list of problems, "
-        "2 for a missing or foreign store.",
+        help="check a demseis store (checksums, done shards complete, labels in range)",
+        description="Check every done shard of a demseis store: every chunk checksum (naming "
+        "each damaged sample and array), complete, no NaN, label values in range, consistent "
+        "parameters. Read only: it takes no lock. Exit 0 when fine, 1 with the list of "
+        "problems, 2 for a missing or foreign store.",
     )
     p.add_argument("path", metavar="PATH", help="store directory")
     p.add_argument("--no-particles", action="store_true",
@@ -42,9 +43,10 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    from demseis.datasets.read import store_summary
+    from demseis.api import open as open_store
+    from demseis.generator.faultinfo import fault_distribution
 
-    print("\n".join(store_summary(args.path)))
+    print("\n".join([open_store(args.path).summary(), *fault_distribution(args.path)]))
     return 0
 
 

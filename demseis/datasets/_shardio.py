@@ -1,13 +1,20 @@
 """Direct crop reads from Zarr v3 shard files (the reading fast path).
 
-A sharded array (codec chain ``sharding_indexed`` with inner codecs ``[bytes]`` or
-``[bytes, blosc]``) stores each (1, H, W) chunk at a byte range of its shard file; the shard
-index at the end of the file (Zarr v3 sharding spec: ``n_chunks`` pairs of little-endian uint64
-``(offset, nbytes)``, then the crc32c of the index) says where. Memory-mapping the shard file:
+A sharded array (codec chain ``sharding_indexed`` with inner codecs ``[bytes, crc32c]`` or
+``[bytes, blosc, crc32c]``) stores each (1, H, W) chunk at a byte range of its shard file; the
+shard index at the end of the file (Zarr v3 sharding spec: ``n_chunks`` pairs of little-endian
+uint64 ``(offset, nbytes)``, then the crc32c of the index) says where. Memory-mapping the shard
+file:
 
-- uncompressed chunks are viewed in place as (H, W) arrays, so a crop copies only its window,
-  which is what a NumPy memmap of the data would do;
+- every chunk read is checked against its crc32c (the 4 bytes zarr's ``crc32c`` codec appends
+  to the encoded chunk; ~27 us per 554 kB section with google-crc32c's hardware CRC, measured),
+  so damaged data raises :class:`StoreError` naming the sample instead of being returned;
+- uncompressed chunks are then viewed in place as (H, W) arrays, so a crop copies only its
+  window, which is what a NumPy memmap of the data would do;
 - Blosc chunks are decoded with numcodecs (the library zarr itself calls), then cropped.
+
+The same checksums let :func:`check_chunk_file` and :func:`check_shard_file` verify a store's
+files without decoding anything (``validate``, and the sweep before it skips a done shard).
 
 This skips zarr-python's asyncio machinery, which costs ~0.5 ms per sample on small reads
 (measured: 18 ms for a 32-sample uint8 slice whose Blosc decoding takes 0.7 ms). Arrays with
@@ -20,19 +27,85 @@ import mmap
 import os
 from pathlib import Path
 
+import google_crc32c
 import numpy as np
 from numcodecs import blosc
 
 from demseis.errors import StoreError
 
 _EMPTY = np.uint64(2**64 - 1)
+CRC_NBYTES = 4
+
+
+def crc_ok(encoded: np.ndarray) -> bool:
+    """True if ``encoded`` (uint8: payload then its little-endian crc32c) is intact."""
+    if encoded.shape[0] < CRC_NBYTES:
+        return False
+    stored = int.from_bytes(bytes(encoded[-CRC_NBYTES:]), "little")
+    return google_crc32c.value(encoded[:-CRC_NBYTES]) == stored
+
+
+def _map(path: Path) -> np.ndarray | None:
+    """The bytes of ``path`` as a read-only uint8 array (memory-mapped); None if missing."""
+    try:
+        fh = open(path, "rb")
+    except FileNotFoundError:
+        return None
+    with fh:
+        if os.fstat(fh.fileno()).st_size == 0:
+            return np.zeros(0, np.uint8)
+        return np.frombuffer(mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ), dtype=np.uint8)
+
+
+def check_chunk_file(path: str | Path) -> str | None:
+    """Problem with one unsharded chunk file whose codecs end in ``crc32c``; None if intact.
+
+    A missing file is not a problem here (zarr does not write chunks equal to the fill value);
+    the caller decides whether the chunk had to exist.
+    """
+    data = _map(Path(path))
+    if data is None:
+        return None
+    return None if crc_ok(data) else "crc32c mismatch"
+
+
+def check_shard_file(path: str | Path, n_chunks: int) -> tuple[str | None, list[int], list[int]]:
+    """Verify a shard file of ``n_chunks`` inner chunks whose inner codecs end in ``crc32c``.
+
+    Returns
+    -------
+    (index_problem, damaged, empty)
+        ``index_problem``: None, or why the shard index cannot be trusted (then every chunk is
+        unreadable and ``damaged`` lists them all); ``damaged``: local indices of chunks whose
+        checksum fails or whose byte range does not fit; ``empty``: local indices of chunks
+        never written. A missing file gives ``("missing", [], all)``.
+    """
+    data = _map(Path(path))
+    everything = list(range(n_chunks))
+    if data is None:
+        return "missing", [], everything
+    index_nbytes = n_chunks * 16
+    if data.shape[0] < index_nbytes + CRC_NBYTES:
+        return "truncated", everything, []
+    raw_index = data[-(index_nbytes + CRC_NBYTES):]
+    if not crc_ok(raw_index):
+        return "index crc32c mismatch", everything, []
+    index = np.frombuffer(bytes(raw_index[:-CRC_NBYTES]), dtype="<u8").reshape(n_chunks, 2)
+    end = data.shape[0] - index_nbytes - CRC_NBYTES
+    damaged, empty = [], []
+    for i, (off, nbytes) in enumerate(index.tolist()):
+        if off == int(_EMPTY):
+            empty.append(i)
+        elif off + nbytes > end or not crc_ok(data[off: off + nbytes]):
+            damaged.append(i)
+    return None, damaged, empty
 
 
 def raw_shard_layout(array) -> tuple[int, tuple[int, int], np.dtype, str | None] | None:
     """(samples per shard, (H, W), dtype, "blosc" or None) if ``array`` can be read raw.
 
     Raw reading needs: 3-D array, chunks (1, H, W), one ``sharding_indexed`` codec whose inner
-    codecs are little-endian ``bytes`` optionally followed by ``blosc``, index codecs
+    codecs are little-endian ``bytes``, optionally ``blosc``, then ``crc32c``; index codecs
     ``bytes`` + ``crc32c``, index at the end, and the default ``/`` chunk key encoding.
     Returns None otherwise.
     """
@@ -51,6 +124,9 @@ def raw_shard_layout(array) -> tuple[int, tuple[int, int], np.dtype, str | None]
     chunk = tuple(conf.get("chunk_shape", ()))
     shape = tuple(meta["shape"])
     compressor = None
+    if inner[-1:] != ["crc32c"]:
+        return None
+    inner, endian = inner[:-1], endian[:-1]
     if inner == ["bytes", "blosc"]:
         compressor, inner = "blosc", ["bytes"]
         endian = endian[:1]
@@ -97,34 +173,33 @@ class RawShardReader:
         self.chunk_nbytes = shape[0] * shape[1] * self.dtype.itemsize
         self._open: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
+    def _damaged(self, shard: int, what: str) -> StoreError:
+        first, last = shard * self.s, (shard + 1) * self.s - 1
+        path = self.array_dir / "c" / str(shard) / "0" / "0"
+        return StoreError(f"samples {first}..{last} of array {self.array_dir.name!r} are damaged: "
+                          f"shard file {str(path)!r} {what}")
+
     def _shard(self, shard: int) -> tuple[np.ndarray, np.ndarray]:
         got = self._open.get(shard)
         if got is not None:
             return got
-        import google_crc32c
-
         path = self.array_dir / "c" / str(shard) / "0" / "0"
-        if not path.is_file():
-            raise StoreError(f"shard file {str(path)!r} is missing")
-        with open(path, "rb") as fh:
-            size = os.fstat(fh.fileno()).st_size
-            if size == 0:
-                raise StoreError(f"shard file {str(path)!r} is empty")
-            # a plain ndarray over the map: slicing it is cheaper than slicing an np.memmap
-            mm = np.frombuffer(mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ), dtype=np.uint8)
+        # a plain ndarray over the map: slicing it is cheaper than slicing an np.memmap
+        mm = _map(path)
+        if mm is None:
+            raise self._damaged(shard, "is missing")
         index_nbytes = self.s * 16
-        if mm.shape[0] < index_nbytes + 4:
-            raise StoreError(f"shard file {str(path)!r} is truncated")
-        raw_index = np.asarray(mm[-(index_nbytes + 4):-4])
-        crc = int(np.frombuffer(np.asarray(mm[-4:]).tobytes(), dtype="<u4")[0])
-        if google_crc32c.value(raw_index.tobytes()) != crc:
-            raise StoreError(f"shard file {str(path)!r} has a corrupt index (crc32c mismatch)")
-        index = raw_index.view("<u8").reshape(self.s, 2)
+        if mm.shape[0] < index_nbytes + CRC_NBYTES:
+            raise self._damaged(shard, "is truncated")
+        raw_index = mm[-(index_nbytes + CRC_NBYTES):]
+        if not crc_ok(raw_index):
+            raise self._damaged(shard, "has a corrupt index (crc32c mismatch)")
+        index = np.frombuffer(bytes(raw_index[:-CRC_NBYTES]), dtype="<u8").reshape(self.s, 2)
         ok = index[:, 0] != _EMPTY
-        if (self.compressor is None and (ok & (index[:, 1] != self.chunk_nbytes)).any()) or (
-            ok & (index[:, 0] + index[:, 1] > mm.shape[0] - index_nbytes - 4)
+        if (self.compressor is None and (ok & (index[:, 1] != self.chunk_nbytes + CRC_NBYTES)).any()) or (
+            ok & (index[:, 0] + index[:, 1] > mm.shape[0] - index_nbytes - CRC_NBYTES)
         ).any():
-            raise StoreError(f"shard file {str(path)!r} has chunk ranges that do not fit")
+            raise self._damaged(shard, "has chunk ranges that do not fit")
         if len(self._open) >= 64:  # bound open maps per process
             self._open.pop(next(iter(self._open)))
         self._open[shard] = (mm, index)
@@ -139,8 +214,13 @@ class RawShardReader:
             h = len(range(*rows.indices(self.shape[0])))
             w = len(range(*cols.indices(self.shape[1])))
             return np.full((h, w), self.fill_value, dtype=self.dtype.newbyteorder("="))
+        encoded = mm[int(off): int(off + index[local, 1])]
+        if not crc_ok(encoded):
+            raise StoreError(f"sample {int(sample)} of array {self.array_dir.name!r} is damaged "
+                             f"(crc32c mismatch in shard file "
+                             f"{str(self.array_dir / 'c' / str(shard) / '0' / '0')!r})")
         if self.compressor == "blosc":
-            raw = blosc.decompress(mm[int(off): int(off + index[local, 1])])
+            raw = blosc.decompress(encoded[:-CRC_NBYTES])
             if len(raw) != self.chunk_nbytes:
                 raise StoreError(f"chunk {sample} of {str(self.array_dir)!r} decodes to "
                                  f"{len(raw)} bytes, expected {self.chunk_nbytes}")

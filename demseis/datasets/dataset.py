@@ -8,6 +8,7 @@ Neither class imports torch at module import time, and neither subclasses torch'
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -15,8 +16,14 @@ import numpy as np
 from numcodecs import blosc
 
 from demseis.datasets._shardio import RawShardReader, raw_shard_layout
-from demseis.datasets.store import SAMPLE_ARRAYS, fill_value_for, open_store, store_layout
-from demseis.errors import InputError
+from demseis.datasets.store import (
+    SAMPLE_ARRAYS,
+    fill_value_for,
+    open_store,
+    shard_status,
+    store_layout,
+)
+from demseis.errors import InputError, StoreError
 
 SPLITS = ("train", "val", "test")
 
@@ -92,8 +99,41 @@ def crop_offsets(seed: int, epoch: int, samples: np.ndarray, n_rows: int,
     return rows, cols
 
 
-def _where_mask(where: Any, params: Mapping[str, np.ndarray], n: int) -> np.ndarray:
+def _where_value(name: str, c: Any, v: np.ndarray,
+                 categories: Mapping[str, Sequence[str]]) -> Any:
+    """A ``where`` value as the stored number: a category name -> its code, ``"inf"`` -> inf.
+
+    Raises InputError naming the parameter and the valid values for anything else.
+    """
+    cats = categories.get(name)
+    if cats is not None:
+        if isinstance(c, str):
+            if c not in cats:
+                raise InputError(f"where[{name!r}] = {c!r} is not a category of {name}; valid: "
+                                 + ", ".join(repr(x) for x in cats))
+            return cats.index(c)
+        if isinstance(c, (int, np.integer)) and not isinstance(c, bool) and 0 <= c < len(cats):
+            return int(c)
+        raise InputError(f"where[{name!r}] = {c!r}: expected one of "
+                         + ", ".join(repr(x) for x in cats))
+    if c is None:  # an open end of a (low, high) range
+        return None
+    if isinstance(c, str):
+        try:
+            c = float(c)  # "inf", "-inf", "20"
+        except ValueError:
+            raise InputError(f"where[{name!r}] = {c!r}: expected a number") from None
+    if isinstance(c, bool) or not isinstance(c, (int, float, np.integer, np.floating)):
+        raise InputError(f"where[{name!r}] = {c!r}: expected a number")
+    if np.isnan(c):
+        raise InputError(f"where[{name!r}] = nan matches nothing; give a number")
+    return c
+
+
+def _where_mask(where: Any, params: Mapping[str, np.ndarray], n: int,
+                categories: Mapping[str, Sequence[str]] | None = None) -> np.ndarray:
     """Boolean mask of the samples selected by ``where`` (see :class:`FaultSegDataset`)."""
+    categories = categories or {}
     if where is None:
         return np.ones(n, dtype=bool)
     if callable(where):
@@ -113,7 +153,7 @@ def _where_mask(where: Any, params: Mapping[str, np.ndarray], n: int) -> np.ndar
         if isinstance(cond, tuple):
             if len(cond) != 2:
                 raise InputError(f"where[{name!r}]: a range is (low, high), got {cond!r}")
-            lo, hi = cond
+            lo, hi = (_where_value(name, c, v, categories) for c in cond)
             m = np.ones(n, dtype=bool)
             if lo is not None:
                 m &= v >= lo
@@ -122,9 +162,12 @@ def _where_mask(where: Any, params: Mapping[str, np.ndarray], n: int) -> np.ndar
         elif isinstance(cond, (list, set, frozenset, np.ndarray)):
             m = np.zeros(n, dtype=bool)
             for c in cond:
-                m |= _equal(v, c)
+                m |= _equal(v, _where_value(name, c, v, categories))
         else:
-            m = _equal(v, cond)
+            if cond is None:
+                raise InputError(f"where[{name!r}] = None: give a value, a (low, high) range or "
+                                 "a list")
+            m = _equal(v, _where_value(name, cond, v, categories))
         mask &= m
     return mask
 
@@ -134,6 +177,68 @@ def _equal(v: np.ndarray, c: Any) -> np.ndarray:
         # parameters are float32 on disk: compare at float32 precision
         return np.isclose(v, c, rtol=1e-6, atol=0.0)
     return v == c
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One stored sample: its arrays (name -> (H, W)) and parameters (categorical ones as
+    their names)."""
+
+    index: int
+    arrays: dict[str, np.ndarray]
+    params: dict[str, Any]
+
+
+def read_sample(path: str | Path, index: int, arrays: Sequence[str] | None = None) -> Sample:
+    """Read sample ``index`` of a store, checking every chunk's checksum.
+
+    Parameters
+    ----------
+    path : store directory.
+    index : global sample index in ``[0, N)``.
+    arrays : sample arrays to read (default: all).
+
+    Raises
+    ------
+    InputError
+        ``index`` out of range, or an array the store does not hold.
+    StoreError
+        The sample's shard is not done, or a chunk of the sample is damaged (the message names
+        the sample and the array).
+    """
+    group = open_store(path, "r")
+    layout = store_layout(group)
+    n = layout.n_samples
+    if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < n:
+        raise InputError(f"sample index {index!r} is outside the store's samples 0..{n - 1}")
+    index = int(index)
+    names = list(layout.arrays) if arrays is None else list(arrays)
+    for name in names:
+        if name not in layout.arrays:
+            raise InputError(f"array {name!r} is not in store {str(path)!r}; it holds "
+                             f"{list(layout.arrays)}")
+    k = index // layout.samples_per_shard
+    if shard_status(path)[k] != 1:
+        raise StoreError(f"sample {index} of {str(path)!r} is in shard {k}, which is not done "
+                         "(pending or failed); rerun the generator to complete it")
+    out: dict[str, np.ndarray] = {}
+    for name in names:
+        try:
+            out[name] = np.asarray(group[name][index])
+        except Exception as exc:  # noqa: BLE001 - checksum mismatch, truncated file
+            raise StoreError(f"sample {index} of array {name!r} in {str(path)!r} is damaged "
+                             f"({exc}); run `demseis validate {path}`") from exc
+    params: dict[str, Any] = {}
+    for name in layout.params:
+        arr = group["params"][name]
+        try:
+            value = arr[index].item()
+        except Exception as exc:  # noqa: BLE001
+            raise StoreError(f"parameter {name!r} of sample {index} in {str(path)!r} is damaged "
+                             f"({exc}); run `demseis validate {path}`") from exc
+        cats = arr.attrs.get("categories")
+        params[name] = cats[int(value)] if cats and 0 <= int(value) < len(cats) else value
+    return Sample(index, out, params)
 
 
 class FaultSegDataset:
@@ -148,7 +253,10 @@ class FaultSegDataset:
         ``name -> value`` (equal; floats at float32 precision), ``name -> (low, high)``
         (inclusive range, either end None), ``name -> [v1, v2, ...]`` (any of), several keys
         combined with AND; or a callable ``f(params) -> (N,) bool`` where ``params`` maps every
-        parameter name to its (N,) array over all samples.
+        parameter name to its (N,) array over all samples. Categorical parameters take their
+        names (``{"noise_kind": "band"}``; an unknown name is an error listing the valid ones),
+        numbers may be given as strings (``"inf"``). A filter that selects none of the done
+        samples is an error naming it.
     split : None (every run) or ``"train"``, ``"val"``, ``"test"``: the samples of the DEM runs
         in that split (:func:`split_of_shards`). Splits never share a run.
     split_fractions : (train, val, test) fractions of runs.
@@ -218,10 +326,24 @@ class FaultSegDataset:
         self.crop = _normalise_crop(crop, layout.shape)
 
         s = layout.samples_per_shard
-        done = np.asarray(group["shard_done"][...]) == 1
+        done = shard_status(self.path) == 1
         sample_ok = np.repeat(done, s)
-        params = {n: np.asarray(group["params"][n][...]) for n in layout.params}
-        sample_ok &= _where_mask(where, params, layout.n_samples)
+        params, categories = {}, {}
+        for n in layout.params:
+            arr = group["params"][n]
+            try:
+                params[n] = np.asarray(arr[...])
+            except Exception as exc:  # noqa: BLE001 - a damaged chunk: name it
+                raise StoreError(f"parameter {n!r} of store {self.path!r} is unreadable ({exc}); "
+                                 f"run `demseis validate {self.path}`") from exc
+            if arr.attrs.get("categories") is not None:
+                categories[n] = list(arr.attrs["categories"])
+        self.categories = categories
+        n_done = int(sample_ok.sum())
+        sample_ok &= _where_mask(where, params, layout.n_samples, categories)
+        if where is not None and n_done and not sample_ok.any():
+            raise InputError(f"where={where!r} selects none of the {n_done} done samples of "
+                             f"{self.path!r}")
         if split is not None:
             labels = split_of_shards(layout.n_shards, split_fractions, split_seed)
             sample_ok &= np.repeat(labels == SPLITS.index(split), s)
@@ -318,7 +440,12 @@ class FaultSegDataset:
                 arr = self._arrays[name]
                 # One covering slice (at most one shard: S samples). zarr 3.1's orthogonal
                 # (integer-list) selection is ~8x slower than the covering slice (measured).
-                block = arr[lo:hi]
+                try:
+                    block = arr[lo:hi]
+                except Exception as exc:  # noqa: BLE001 - checksum mismatch, truncated file
+                    raise StoreError(f"samples {lo}..{hi - 1} of array {name!r} in {self.path!r} "
+                                     f"are unreadable ({exc}); run `demseis validate "
+                                     f"{self.path}`") from exc
                 rows = wanted - lo
                 lookup = dict(zip(wanted.tolist(), rows.tolist()))
                 for m in members.tolist():

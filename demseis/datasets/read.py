@@ -16,11 +16,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from demseis.datasets.store import open_store
+from demseis.datasets.store import open_store, shard_status
 from demseis.errors import InputError, StoreError
 
 
-def done_samples(root: Any, n: int, path: str | Path) -> NDArray[np.bool_]:
+def done_samples(root: Any, n: int, path: str | Path, *,
+                 require_any: bool = True) -> NDArray[np.bool_]:
     """(n,) bool: the samples of completed shards (``shard_done == 1``).
 
     Parameters
@@ -31,20 +32,22 @@ def done_samples(root: Any, n: int, path: str | Path) -> NDArray[np.bool_]:
         Number of samples of the array the mask is for.
     path : str or Path
         The store path, for messages.
+    require_any : bool
+        Raise when no shard is complete (scoring and the baseline need samples).
 
     Raises
     ------
     StoreError
-        The samples do not split into the shards, or no shard is complete.
+        The samples do not split into the shards, or (``require_any``) no shard is complete.
     """
     valid = np.ones(n, bool)
     if "shard_done" in set(root.array_keys()):
-        done = np.asarray(root["shard_done"][:]) == 1
+        done = shard_status(path) == 1  # a damaged flag reads as not done
         if done.size == 0 or n % done.size:
             raise StoreError(f"store {str(path)!r}: {n} samples do not split into "
                              f"{done.size} shards")
         valid = np.repeat(done, n // done.size)
-    if not valid.any():
+    if require_any and not valid.any():
         raise StoreError(f"store {str(path)!r} is empty: no shard is complete "
                          "(shard_done is 0 everywhere); finish the sweep first")
     return valid
@@ -55,7 +58,11 @@ def read_params(root: Any, n: int) -> dict[str, NDArray[Any]]:
     params: dict[str, NDArray[Any]] = {}
     if "params" in set(root.group_keys()):
         for key in sorted(root["params"].array_keys()):
-            arr = np.asarray(root["params"][key][:])
+            try:
+                arr = np.asarray(root["params"][key][:])
+            except Exception as exc:  # noqa: BLE001 - a chunk failing its checksum
+                raise StoreError(f"parameter {key!r} of the store is damaged ({exc}); run "
+                                 "`demseis validate` to list the damaged shards") from exc
             if arr.shape == (n,):
                 params[key] = arr
     return params
@@ -178,9 +185,10 @@ def store_summary(path: str | Path) -> list[str]:
     lines = [f"store: {path}", f"demseis schema: {attrs.get('demseis', {})}"]
     n, h, w = root["seismic"].shape
     n_shards = int(root["shard_done"].shape[0]) if "shard_done" in root else 1
-    status = np.asarray(root["shard_done"][:]) if "shard_done" in root else np.ones(1)
-    lines.append(f"samples: {n} in {n_shards} shards of {n // max(n_shards, 1)}; "
-                 f"done shards: {int((status == 1).sum())}")
+    done = done_samples(root, int(n), path, require_any=False)
+    per_shard = n // max(n_shards, 1)
+    lines.append(f"samples: {n} in {n_shards} shards of {per_shard}; "
+                 f"done shards: {int(done.sum()) // max(per_shard, 1)}")
     grid = attrs.get("grid", {})
     lines.append(f"grid: {h} x {w} cells of {grid.get('cell_m')} m")
     for name in ("seismic", "fault", "damage", "strain", "layer", "impedance", "fault_id",
@@ -188,15 +196,15 @@ def store_summary(path: str | Path) -> list[str]:
         if name in root:
             a = root[name]
             lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks {tuple(a.chunks)}")
-    done = np.repeat(status == 1, n // max(n_shards, 1))
     lines.append("parameters (over done samples):")
     for name, vals in read_params(root, int(n)).items():
         vals = vals[done]
         if vals.size == 0:
             continue
-        if name in codes:
-            uniq = sorted({codes[name][int(v)] for v in vals})
-            lines.append(f"  {name:22s} {', '.join(uniq)}")
+        if name in codes:                # names with their sample counts, e.g. imaging 1d (6), psf (6)
+            codes_used, counts = np.unique(vals.astype(np.int64), return_counts=True)
+            shown = ", ".join(f"{codes[name][int(c)]} ({int(k)})" for c, k in zip(codes_used, counts))
+            lines.append(f"  {name:22s} {shown}")
             continue
         uniq = np.unique(vals)
         if uniq.size <= 6:

@@ -33,7 +33,7 @@ import json
 import shutil
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -43,48 +43,136 @@ from demseis import __version__
 from demseis.types import Snapshot
 from demseis.errors import InputError, StoreError
 
-SCHEMA_VERSION = 1
-"""Version of the on-disk layout. Readers refuse stores of any other version."""
+SCHEMA_VERSION = 2
+"""Version of the on-disk layout. Readers refuse stores of any other version.
 
-SAMPLE_ARRAYS: dict[str, np.dtype] = {
-    "seismic": np.dtype("float32"),
-    "fault": np.dtype("uint8"),
-    "damage": np.dtype("uint8"),
-    "strain": np.dtype("float32"),
-    "layer": np.dtype("int16"),
-    "impedance": np.dtype("float32"),
-    "fault_id": np.dtype("int16"),
-    "slip_m": np.dtype("float32"),
-    "dip_deg": np.dtype("float32"),
-    "sense": np.dtype("uint8"),
+1: the first layout. 2: a crc32c checksum on every chunk, coordinate arrays (``depth`` or
+``twt``, and ``x``), ``units`` and ``long_name`` on every array, categorical parameters with
+their category names, dimension names on the particle arrays.
+"""
+
+
+@dataclass(frozen=True)
+class ArraySpec:
+    """Declaration of one per-sample array (one line of :data:`SAMPLE_ARRAY_SPECS`).
+
+    Attributes
+    ----------
+    dtype : fixed on-disk dtype.
+    units : UDUNITS string (``"1"`` for dimensionless values and labels).
+    long_name : what the array holds, written as the ``long_name`` attribute.
+    valid_range : inclusive (low, high) of an integer label (high None: unbounded), checked by
+        :func:`write_shard` and ``validate``; None for float arrays.
+    compressed : Blosc-lz4 (labels, strain) or raw (network inputs, read as zero-copy crops).
+    """
+
+    dtype: str
+    units: str
+    long_name: str
+    valid_range: tuple[int, int | None] | None = None
+    compressed: bool = True
+
+
+SAMPLE_ARRAY_SPECS: dict[str, ArraySpec] = {
+    "seismic": ArraySpec("float32", "1", "seismic amplitude (band-limited, with noise)",
+                         compressed=False),
+    "fault": ArraySpec("uint8", "1", "fault label: 1 on a slip surface, 0 elsewhere", (0, 1)),
+    "damage": ArraySpec("uint8", "1", "damage class: 0 background, 1 damage zone, 2 fault core",
+                        (0, 2)),
+    "strain": ArraySpec("float32", "1", "maximum shear strain since the reference snapshot"),
+    "layer": ArraySpec("int16", "1", "layer index (-1: no rock, above the free surface)",
+                       (-1, None)),
+    "impedance": ArraySpec("float32", "kg/(m^2 s)", "acoustic impedance", compressed=False),
+    "fault_id": ArraySpec("int16", "1", "fault instance id on fault cells (0: no fault)",
+                          (0, None)),
+    "slip_m": ArraySpec("float32", "m", "slip (displacement jump) of the nearest fault trace"),
+    "dip_deg": ArraySpec("float32", "degree", "dip of the nearest fault trace"),
+    "sense": ArraySpec("uint8", "1", "sense of slip: 0 none, 1 normal, 2 reverse", (0, 2)),
 }
-"""Known per-sample arrays and their fixed dtypes."""
+"""Every per-sample array a store may hold, in store order: adding one is one line here."""
+
+SAMPLE_ARRAYS: dict[str, np.dtype] = {n: np.dtype(a.dtype) for n, a in SAMPLE_ARRAY_SPECS.items()}
+"""Known per-sample arrays and their fixed dtypes (from :data:`SAMPLE_ARRAY_SPECS`)."""
 
 DEFAULT_ARRAYS: tuple[str, ...] = ("seismic", "fault", "damage", "strain", "layer")
 """Arrays written when ``arrays`` is not given (impedance is opt-in)."""
 
 LABEL_RANGES: dict[str, tuple[int, int | None]] = {
-    "fault": (0, 1),
-    "damage": (0, 2),
-    "layer": (-1, None),  # -1: no rock (above the free surface), see demseis.labels
-    "fault_id": (0, None),
-    "sense": (0, 2),
+    n: a.valid_range for n, a in SAMPLE_ARRAY_SPECS.items() if a.valid_range is not None
 }
 """Inclusive valid value range of each integer label array (None: no upper bound)."""
 
-PARTICLE_FIELDS: dict[str, np.dtype] = {
-    "ids": np.dtype("int64"),
-    "x": np.dtype("float64"),
-    "y": np.dtype("float64"),
-    "radius": np.dtype("float64"),
-    "layer": np.dtype("int16"),
-    "deposited": np.dtype("bool"),
-    "offsets": np.dtype("int64"),
-    "index": np.dtype("int32"),
-    "step": np.dtype("int64"),
-    "throw_m": np.dtype("float64"),
+UNCOMPRESSED_ARRAYS: tuple[str, ...] = tuple(
+    n for n, a in SAMPLE_ARRAY_SPECS.items() if not a.compressed
+)
+"""Sample arrays stored without compression: network inputs, read as zero-copy crops.
+
+Band-limited float sections compress to only ~80-90 % with lz4/zstd, and decoding costs more
+than the read (measured: 0.47 ms vs 0.90 ms per 320x512 sample). Labels and strain compress
+many-fold and are stored with Blosc-lz4.
+"""
+
+PARTICLE_FIELDS: dict[str, tuple[str, str, str, str]] = {
+    "ids": ("int64", "element", "1", "element id (stable across the snapshots of a run)"),
+    "x_m": ("float64", "element", "m", "element centre x"),
+    "y_m": ("float64", "element", "m", "element centre elevation"),
+    "radius_m": ("float64", "element", "m", "element radius"),
+    "layer": ("int16", "element", "1", "layer index (growth layers >= n_layers)"),
+    "deposited": ("bool", "element", "1", "added by syn-tectonic sedimentation"),
+    "offsets": ("int64", "snapshot_edge", "1",
+                "snapshot k is elements offsets[k]:offsets[k+1]"),
+    "index": ("int32", "snapshot", "1", "snapshot index"),
+    "step": ("int64", "snapshot", "1", "integrator step of the snapshot"),
+    "throw_m": ("float64", "snapshot", "m", "basement throw at the snapshot"),
 }
-"""Arrays of one ``particles/run_<id>`` group (the first six concatenated over snapshots)."""
+"""Arrays of one ``particles/run_<id>`` group: dtype, dimension, units, long_name (the first six
+are concatenated over snapshots). Units in the names, and no name equal to a coordinate of
+the root group: xarray's DataTree would shadow it with the inherited coordinate."""
+
+COORDS: dict[str, tuple[str, str]] = {
+    "depth": ("m", "depth below the model top (cell centres)"),
+    "twt": ("s", "two-way time below the model top"),
+    "x": ("m", "horizontal position (cell centres)"),
+}
+"""Coordinate arrays of the sample axes: units and long_name. Rows are ``depth`` (depth-domain
+stores) or ``twt`` (time-domain stores), columns are ``x``."""
+
+UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
+    ("_kg_m3", "kg/m^3"), ("_m_s2", "m/s^2"), ("_m_s", "m/s"), ("_n_m", "N/m"),
+    ("_deg", "deg"), ("_hz", "Hz"), ("_db", "dB"), ("_cells", "cells"), ("_m", "m"),
+    ("_s", "s"), ("_n", "N"),
+)
+"""Units of a parameter given without units (:class:`ParamSpec`), from its name's suffix (the
+project's names carry units), longest first; any other name is dimensionless (``"1"``). The
+generator passes the declared units of :mod:`demseis.parameters`; a test keeps the two in step."""
+
+
+def units_of(name: str) -> str:
+    """Units of a parameter called ``name`` (from :data:`UNIT_SUFFIXES`)."""
+    for suffix, units in UNIT_SUFFIXES:
+        if name.endswith(suffix):
+            return units
+    return "1"
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """Declaration of one per-sample parameter passed to :func:`create_store`.
+
+    Attributes
+    ----------
+    dtype : integer or float dtype.
+    long_name : what it is (default: the name with spaces).
+    units : e.g. ``"m"``, ``"Hz"``, ``"1"`` (dimensionless); default from the name's suffix
+        (:func:`units_of`).
+    categories : names of the codes 0, 1, ... of a categorical parameter (stored as integer
+        codes, read back as strings by :func:`to_xarray` and accepted as strings by ``where=``).
+    """
+
+    dtype: str
+    long_name: str | None = None
+    units: str | None = None
+    categories: tuple[str, ...] | None = None
 
 _ALLOWED_PARAM_KINDS = "iuf"
 
@@ -109,24 +197,30 @@ def fill_value_for(dtype: np.dtype) -> Any:
     raise InputError(f"dtype {dtype} is not supported in a demseis store (use int, uint or float)")
 
 
-UNCOMPRESSED_ARRAYS: tuple[str, ...] = ("seismic", "impedance")
-"""Sample arrays stored without compression: network inputs, read as zero-copy crops.
-
-Band-limited float sections compress to only ~80-90 % with lz4/zstd, and decoding costs more
-than the read (measured: 0.47 ms vs 0.90 ms per 320x512 sample). Labels and strain compress
-many-fold and are stored with Blosc-lz4.
-"""
-
-
-def _sample_compressor(name: str, dtype: np.dtype):
-    from zarr.codecs import BloscCodec
+def _sample_compressors(name: str, dtype: np.dtype) -> tuple:
+    """Codecs after ``bytes`` of one chunk of sample array ``name``: [Blosc-lz4,] crc32c."""
+    from zarr.codecs import BloscCodec, Crc32cCodec
 
     if name in UNCOMPRESSED_ARRAYS:
-        return None
+        return (Crc32cCodec(),)
     # lz4 decodes at GB/s; labels compress ~200-fold (measured 0.005 of raw for fault masks,
     # 0.02 ms decode per 320x512 sample; bit-shuffle was 5x slower to decode for no gain).
     shuffle = "shuffle" if dtype.itemsize > 1 else "noshuffle"
-    return BloscCodec(cname="lz4", clevel=5, shuffle=shuffle)
+    return (BloscCodec(cname="lz4", clevel=5, shuffle=shuffle), Crc32cCodec())
+
+
+def _flag_compressors() -> tuple:
+    """Codecs of a done flag (one byte): crc32c only, so the flags are read without zarr."""
+    from zarr.codecs import Crc32cCodec
+
+    return (Crc32cCodec(),)
+
+
+def _small_compressors() -> tuple:
+    """Codecs of the small arrays (parameters, flags, particles, coordinates): zstd, crc32c."""
+    from zarr.codecs import Crc32cCodec, ZstdCodec
+
+    return (ZstdCodec(level=0, checksum=False), Crc32cCodec())
 
 
 def _particle_group_name(run_id: int) -> str:
@@ -172,9 +266,15 @@ def _check_store_metadata(path: Path) -> dict:
         raise StoreError(f"{str(path)!r} is a Zarr store but was not written by demseis")
     version = info["schema_version"]
     if version != SCHEMA_VERSION:
+        hint = ""
+        if isinstance(version, int) and version < SCHEMA_VERSION:
+            # refused, not read: an old store has no chunk checksums, so none of the integrity
+            # guarantees of this version would hold for it
+            hint = ("; it was written by an older demseis: regenerate it with `demseis generate` "
+                    "(or `demseis render` from its particles with that older version)")
         raise StoreError(
             f"store {str(path)!r} has schema version {version!r} but this demseis "
-            f"({__version__}) reads schema version {SCHEMA_VERSION}"
+            f"({__version__}) reads schema version {SCHEMA_VERSION}{hint}"
         )
     return meta
 
@@ -355,20 +455,28 @@ def _normalise_dtypes(arrays: Mapping[str, Any] | Iterable[str] | None) -> dict[
     return {name: out[name] for name in SAMPLE_ARRAYS if name in out}
 
 
-def _normalise_params(params: Mapping[str, Any] | None) -> dict[str, np.dtype]:
-    out: dict[str, np.dtype] = {}
-    for name, dtype in (params or {}).items():
+def _normalise_params(params: Mapping[str, Any] | None) -> dict[str, ParamSpec]:
+    out: dict[str, ParamSpec] = {}
+    for name, value in (params or {}).items():
         if not isinstance(name, str) or not name.isidentifier():
             raise InputError(f"parameter name {name!r} must be an identifier")
+        spec = value if isinstance(value, ParamSpec) else ParamSpec(value)
         try:
-            dt = np.dtype(dtype)
+            dt = np.dtype(spec.dtype)
         except TypeError as exc:
-            raise InputError(f"parameter {name!r}: {dtype!r} is not a NumPy dtype") from exc
+            raise InputError(f"parameter {name!r}: {spec.dtype!r} is not a NumPy dtype") from exc
         if dt.kind not in _ALLOWED_PARAM_KINDS or dt.itemsize > 8:
             raise InputError(
                 f"parameter {name!r} has dtype {dt}; allowed: signed/unsigned integers and floats"
             )
-        out[name] = dt
+        if spec.categories is not None:
+            cats = tuple(spec.categories)
+            if dt.kind not in "iu" or not cats or len(set(cats)) != len(cats) or not all(
+                    isinstance(c, str) and c for c in cats):
+                raise InputError(f"parameter {name!r}: categories must be distinct non-empty "
+                                 f"strings of an integer parameter, got {spec.categories!r}")
+            spec = replace(spec, categories=cats)
+        out[name] = replace(spec, dtype=str(dt))
     return dict(sorted(out.items()))
 
 
@@ -393,10 +501,13 @@ def create_store(
     shape : (H, W) of one sample.
     arrays : sample arrays to create, dict name -> dtype (dtypes must match
         :data:`SAMPLE_ARRAYS`) or a list of names; default :data:`DEFAULT_ARRAYS`.
-    params : per-sample parameters, dict name -> dtype (integer or float), e.g.
-        ``{"run_id": "int32", "snr_db": "float32"}``.
+    params : per-sample parameters, dict name -> dtype (integer or float) or
+        :class:`ParamSpec` (dtype, long_name, units, categories), e.g.
+        ``{"run_id": "int32", "noise_kind": ParamSpec("int8", categories=("white", "band"))}``.
     attrs : root attributes, JSON-serialisable; should hold ``config`` (the full resolved
-        config) and ``grid`` ({"x0_m", "top_m", "cell_m", "nz", "nx"}). ``demseis`` is added.
+        config) and ``grid`` ({"x0_m", "top_m", "cell_m", "nz", "nx"}, plus ``domain="time"``,
+        ``dt_s``, ``nt`` for time-domain samples): the coordinate arrays ``depth`` (or ``twt``)
+        and ``x`` are written from it. ``demseis`` is added.
     overwrite : replace an existing demseis store (or an empty directory). A non-empty
         directory that is not a demseis store is never deleted.
 
@@ -430,7 +541,8 @@ def create_store(
     if len(shape_t) != 2 or min(shape_t) < 1:
         raise InputError(f"shape must be (H, W) with positive sizes, got {tuple(shape)!r}")
     array_dtypes = _normalise_dtypes(arrays)
-    param_dtypes = _normalise_params(params)
+    param_specs = _normalise_params(params)
+    param_dtypes = {k: np.dtype(v.dtype) for k, v in param_specs.items()}
     attrs = dict(attrs or {})
     if "demseis" in attrs:
         raise InputError("attrs must not contain 'demseis': it is written by create_store")
@@ -469,7 +581,15 @@ def create_store(
     h, w = shape_t
     n = wanted.n_samples
     s = wanted.samples_per_shard
+    row_dim, coords = _grid_coords(attrs.get("grid"), shape_t)
+    for name, values in coords.items():
+        units, long_name = COORDS[name]
+        group.create_array(name, shape=values.shape, dtype="float64", chunks=values.shape,
+                           fill_value=float("nan"), compressors=_small_compressors(),
+                           dimension_names=(name,),
+                           attributes={"units": units, "long_name": long_name})[...] = values
     for name, dtype in array_dtypes.items():
+        spec = SAMPLE_ARRAY_SPECS[name]
         group.create_array(
             name,
             shape=(n, h, w),
@@ -477,18 +597,21 @@ def create_store(
             chunks=(1, h, w),
             shards=(s, h, w),
             fill_value=fill_value_for(dtype),
-            compressors=_sample_compressor(name, dtype),
-            dimension_names=("sample", "z", "x"),
+            compressors=_sample_compressors(name, dtype),
+            dimension_names=("sample", row_dim, "x"),
+            attributes={"units": spec.units, "long_name": spec.long_name},
         )
     pgroup = group.create_group("params")
-    for name, dtype in param_dtypes.items():
+    for name, spec in param_specs.items():
         pgroup.create_array(
             name,
             shape=(n,),
-            dtype=dtype,
+            dtype=spec.dtype,
             chunks=(s,),  # one chunk per shard: each shard task owns exactly one chunk file
-            fill_value=fill_value_for(dtype),
+            fill_value=fill_value_for(spec.dtype),
+            compressors=_small_compressors(),
             dimension_names=("sample",),
+            attributes=_param_attrs(name, spec),
         )
     group.create_array(
         "shard_done",
@@ -496,10 +619,51 @@ def create_store(
         dtype="uint8",
         chunks=(1,),
         fill_value=0,
+        compressors=_flag_compressors(),
         dimension_names=("shard",),
+        attributes={"units": "1", "long_name": "1 once the shard (one DEM run) is complete",
+                    "flag_values": [0, 1], "flag_meanings": "pending done"},
     )
     group.create_group("particles")
     return group
+
+
+def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.ndarray]]:
+    """Row dimension name and coordinate values of the sample axes, from the ``grid`` attr.
+
+    Cell centres as :class:`demseis.seismic.grid.Grid` defines them: ``x = x0_m + (j + 0.5)
+    cell_m``, depth below the top ``(i + 0.5) cell_m``; time-domain stores (``domain = "time"``)
+    have rows ``twt = k dt_s`` (the axis of :func:`demseis.seismic.time_axis`). No coordinates
+    when the attr is absent or does not match the sample shape.
+    """
+    if not isinstance(grid, Mapping):
+        return "depth", {}
+    time = grid.get("domain", "depth") == "time"
+    row_dim = "twt" if time else "depth"
+    try:
+        cell, nx = float(grid["cell_m"]), int(grid["nx"])
+        x = float(grid["x0_m"]) + (np.arange(nx) + 0.5) * cell
+        rows = (np.arange(int(grid["nt"])) * float(grid["dt_s"]) if time
+                else (np.arange(int(grid["nz"])) + 0.5) * cell)
+    except (KeyError, TypeError, ValueError):
+        return row_dim, {}
+    if (rows.shape[0], x.shape[0]) != shape:
+        return row_dim, {}
+    return row_dim, {row_dim: rows, "x": x}
+
+
+def _param_attrs(name: str, spec: ParamSpec) -> dict[str, Any]:
+    """``units``, ``long_name`` and, for a categorical parameter, CF ``flag_values`` /
+    ``flag_meanings`` plus ``categories`` (the names in code order)."""
+    out: dict[str, Any] = {
+        "units": spec.units if spec.units is not None else units_of(name),
+        "long_name": spec.long_name or name.replace("_", " "),
+    }
+    if spec.categories is not None:
+        out["categories"] = list(spec.categories)
+        out["flag_values"] = list(range(len(spec.categories)))
+        out["flag_meanings"] = " ".join(c.replace(" ", "_") for c in spec.categories)
+    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -581,9 +745,9 @@ def write_particles(path: str | Path, run_id: int, snapshots: Sequence[Snapshot]
     counts = np.array([sn.ids.shape[0] for sn in snaps], dtype=np.int64)
     data = {
         "ids": np.concatenate([np.asarray(sn.ids) for sn in snaps]),
-        "x": np.concatenate([np.asarray(sn.xy)[:, 0] for sn in snaps]),
-        "y": np.concatenate([np.asarray(sn.xy)[:, 1] for sn in snaps]),
-        "radius": np.concatenate([np.asarray(sn.radius) for sn in snaps]),
+        "x_m": np.concatenate([np.asarray(sn.xy)[:, 0] for sn in snaps]),
+        "y_m": np.concatenate([np.asarray(sn.xy)[:, 1] for sn in snaps]),
+        "radius_m": np.concatenate([np.asarray(sn.radius) for sn in snaps]),
         "layer": np.concatenate([np.asarray(sn.layer) for sn in snaps]),
         "deposited": np.concatenate([np.asarray(sn.deposited) for sn in snaps]),
         "offsets": np.concatenate([[0], np.cumsum(counts)]),
@@ -594,7 +758,7 @@ def write_particles(path: str | Path, run_id: int, snapshots: Sequence[Snapshot]
     root = zarr.open_group(Path(path), mode="r+", use_consolidated=False)
     group = root.create_group(_particle_group_name(run_id), overwrite=True,
                               attributes={"run_id": int(run_id), "n_snapshots": len(snaps)})
-    for name, dtype in PARTICLE_FIELDS.items():
+    for name, (dtype, dim, units, long_name) in PARTICLE_FIELDS.items():
         values = data[name].astype(dtype, copy=False)
         group.create_array(
             name,
@@ -602,6 +766,11 @@ def write_particles(path: str | Path, run_id: int, snapshots: Sequence[Snapshot]
             dtype=dtype,
             chunks=(max(1, values.shape[0]),),
             fill_value=0,
+            compressors=_small_compressors(),
+            dimension_names=(dim,),
+            attributes={"units": units, "long_name": long_name},
+            # write the chunk even when it is all zeros, so that a missing file means damage
+            config={"write_empty_chunks": True},
         )[...] = values
 
 
@@ -611,7 +780,7 @@ def read_particles(path: str | Path, run_id: int) -> list[Snapshot]:
     Returns
     -------
     list[Snapshot]
-        In snapshot order, with the dtypes of :class:`~demseis.dem.types.Snapshot`
+        In snapshot order, with the dtypes of :class:`~demseis.types.Snapshot`
         (ids int64, xy (n, 2) float64, radius float64, layer int16, deposited bool).
 
     Raises
@@ -643,8 +812,8 @@ def read_particles(path: str | Path, run_id: int) -> list[Snapshot]:
                 step=int(d["step"][k]),
                 throw_m=float(d["throw_m"][k]),
                 ids=d["ids"][s].copy(),
-                xy=np.stack([d["x"][s], d["y"][s]], axis=1),
-                radius=d["radius"][s].copy(),
+                xy=np.stack([d["x_m"][s], d["y_m"][s]], axis=1),
+                radius=d["radius_m"][s].copy(),
                 layer=d["layer"][s].copy(),
                 deposited=d["deposited"][s].copy(),
             )
@@ -718,10 +887,14 @@ def write_shard(
         run_id = k
 
     done = group["shard_done"]
-    if done[k] != 0:
-        done[k] = 0  # a rewrite must not leave a done flag over half-new data
+    # a rewrite must not leave a done flag over half-new data (writing the fill value deletes
+    # the chunk file without reading it, so a damaged flag is no obstacle)
+    done[k] = 0
     sel = layout.shard_slice(k)
     for name in layout.arrays:
+        # zarr merges a write into an existing shard file (it reads its index first), so a
+        # damaged old shard would make the rewrite fail: remove it, the shard is not done
+        (Path(path) / name / "c" / str(k) / "0" / "0").unlink(missing_ok=True)
         _write_array(group[name], sel, data[name])
     for name in layout.params:
         _write_array(group["params"][name], sel, pdata[name])
@@ -734,10 +907,23 @@ def write_shard(
 # status, failures, finalisation
 
 
-def shard_status(path: str | Path) -> np.ndarray:
-    """Done flags of every shard: (n_shards,) uint8, 0 = pending (or failed), 1 = done."""
+def shard_status(path: str | Path, *, verify: bool = False) -> np.ndarray:
+    """Done flags of every shard: (n_shards,) uint8, 0 = pending (or failed), 1 = done.
+
+    A flag whose chunk fails its checksum reads as 0 (pending). With ``verify``, a done shard
+    whose files are damaged (:func:`demseis.datasets.integrity.shard_damage`: every chunk's
+    crc32c, the shard indexes, missing files) also reads as 0, so a resumed sweep rewrites it;
+    this reads every byte of the done shards once (no decoding).
+    """
+    from demseis.datasets.integrity import damaged_shards, read_done_flags
+
     group = open_store(path, "r+")
-    return np.asarray(group["shard_done"][...], dtype=np.uint8)
+    flags, _ = read_done_flags(path, int(group["shard_done"].shape[0]), group["shard_done"])
+    status = (flags == 1).astype(np.uint8)
+    if verify:
+        for k in damaged_shards(path, group):
+            status[k] = 0
+    return status
 
 
 def record_failures(path: str | Path, failures: Mapping[int, str]) -> dict[str, str]:

@@ -1,8 +1,10 @@
 """Integrity checks of a demseis store (``demseis validate PATH``).
 
 Only shards whose done flag is set are checked: pending shards are work still to do, not
-problems. A done shard must be complete (every chunk present), finite, hold labels within range
-and consistent parameters, and its DEM run's particle snapshots (when stored) must be readable.
+problems. A done shard must pass every chunk checksum (each damaged sample and array is named),
+be complete (every chunk present), finite, hold labels within range and consistent parameters,
+and its DEM run's particle snapshots (when stored) must be readable. ``validate`` only reads,
+so it takes no writer lock and may run while a sweep writes (it checks the shards done so far).
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from demseis.datasets.integrity import read_done_flags, shard_damage
 from demseis.datasets.store import (
     LABEL_RANGES,
     SCHEMA_VERSION,
@@ -124,7 +127,7 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
     StoreError
         The path is missing, foreign or of another schema version (the CLI exits 2).
     """
-    group = open_store(path, "r+")
+    group = open_store(path, "r")  # read only: validate never writes, so it takes no lock
     attrs = dict(group.attrs)
     layout = store_layout(group)
     report = ValidationReport(path=str(path), n_shards=layout.n_shards)
@@ -154,11 +157,10 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
                 f"grid nz, nx = ({grid['nz']}, {grid['nx']}) but samples are {layout.shape}"
             )
 
-    try:
-        done = np.asarray(group["shard_done"][...])
-    except Exception as exc:  # noqa: BLE001 - report, don't crash
-        problems.append(f"shard_done is unreadable: {exc}")
-        return report
+    done, damaged_flags = read_done_flags(path, layout.n_shards, group["shard_done"])
+    for k in damaged_flags:
+        problems.append(f"shard {k}: done flag is damaged (crc32c mismatch); the shard counts "
+                        "as pending and a resumed sweep rewrites it")
     bad_flags = np.nonzero(done > 1)[0]
     if bad_flags.size:
         problems.append(f"shard_done holds values other than 0/1 at shards {_fmt(bad_flags)}")
@@ -176,7 +178,11 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
     for k in tqdm(done_shards.tolist(), desc="validate", unit="shard", disable=not progress,
                   file=sys.stderr):
         sel = layout.shard_slice(k)
+        damage = shard_damage(path, k, group, layout)  # checksums: names every damaged sample
+        problems.extend(damage)
         for name in layout.arrays:
+            if any(f"shard {k}: {name} " in line for line in damage):
+                continue
             try:
                 values = group[name][sel]
             except Exception as exc:  # noqa: BLE001
@@ -185,6 +191,8 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
             problems.extend(_check_array(name, values, k, sel.start))
         pvals: dict[str, np.ndarray] = {}
         for name, dtype in layout.params.items():
+            if any(f"shard {k}: parameter {name} " in line for line in damage):
+                continue
             try:
                 v = pgroup[name][sel]
             except Exception as exc:  # noqa: BLE001
@@ -208,7 +216,8 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
         run_id = run_of_shard.get(k, k)
         if "snapshot" in pvals and (pvals["snapshot"] < 0).any():
             problems.append(f"shard {k}: parameter snapshot has negative values")
-        if check_particles and (Path(path) / f"particles/run_{run_id:05d}" / "zarr.json").is_file():
+        if check_particles and not any("particles" in line for line in damage) and (
+                Path(path) / f"particles/run_{run_id:05d}" / "zarr.json").is_file():
             try:
                 snaps = read_particles(path, run_id)
             except StoreError as exc:

@@ -12,8 +12,9 @@ geometry; ``build_assembly(..., pack=...)`` then only assigns layers.
 
 from demseis.dem.assembly import Assembly, Pack, build_assembly, settle_pack
 from demseis.dem.engine import Engine, time_step
+from demseis.dem.basement import BasementFault, FaultSystem
 from demseis.dem.fault import simulate
-from demseis.dem.types import Material, NormalFault
+from demseis.dem.types import BRITTLE, Material, NormalFault
 
-__all__ = ["Assembly", "Engine", "Material", "NormalFault", "Pack",
+__all__ = ["BRITTLE", "Assembly", "BasementFault", "Engine", "FaultSystem", "Material", "NormalFault", "Pack",
            "build_assembly", "settle_pack", "simulate", "time_step"]

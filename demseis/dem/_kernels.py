@@ -8,19 +8,25 @@ Conventions shared by every kernel
 - Neighbour (Verlet) list in ELL layout: ``nbr`` (n, K) int32 holds, in row ``i``, the partners
   ``j > i`` with ``|x_j - x_i| < r_i + r_j + skin`` at the last rebuild; ``n_nbr`` (n,) int32 the
   row lengths. Pair history lives beside it: ``shear`` (n, K) float64 accumulated tangential
-  displacement X_s (m) and ``bond`` (n, K) uint8 (1 = intact bond).
+  displacement X_s (m) and ``bond`` (n, K) uint8 (0 none, 1 intact tensile bond, 2 brittle
+  bond: tensile, and broken also by shear).
 - Walls are straight segments ``walls`` (nw, 4) float64 ``[x0, y0, x1, y1]`` moving with
   ``wall_vel`` (nw, 2) m/s; ``wall_shear`` (n, nw) float64 is the element-wall X_s history.
 
-Force law (the paper's Eq. 1-4 with the slider correction of DESIGN.md)
+Force law (the paper's Eq. 1-4 with the slider correction of docs/physics.md)
 -------------------------------------------------------------------------
 With d the centre distance, R = r_i + r_j and n the unit vector from i to j:
 
-- bonded pair: F_n = Kn (R - d) (repulsive > 0, attractive < 0) until d - R > r0 R, then the
-  bond breaks for ever;
-- unbonded pair: F_n = Kn (R - d) if d < R, else 0 and the history is reset;
-- tangential: X_s += (v_j - v_i) . t dt,  F_s = -Ks X_s,  |F_s| <= C0 + mu max(F_n, 0)
-  (Mohr-Coulomb slider: on slip, X_s is reset onto the cap).
+- bonded pair (``bond`` 1 or 2): F_n = Kn (R - d) (repulsive > 0, attractive < 0) until
+  d - R > r0 R, then the bond breaks for ever;
+- other pairs: F_n = Kn (R - d) if d < R, else 0 and the history (X_s, flag) is reset;
+- tangential: X_s += (v_j - v_i) . t dt,  F_s = -Ks X_s,  |F_s| <= C + mu max(F_n, 0)
+  (Mohr-Coulomb slider: on slip, X_s is reset onto the cap). C = C0 on a flagged pair
+  (``bond`` 1 or 2) and ``c0_heal * C0`` on an unflagged one. A brittle bond
+  (``bond == 2``, the brittle model) also breaks for ever when its shear force reaches the
+  cap (tension or shear, whichever first): strain softening.
+- per-element material ``cmat`` (n, 4) = [Kn, mu, C0, r0]; a pair takes the smaller value of
+  each (the weaker element controls the contact), Ks = ks_ratio * Kn.
 
 Force on j: F_n n + F_s t; on i the opposite. Each element also feels -eta v and -m g y-hat.
 Integration: velocity Verlet (kick-drift-kick), damping evaluated with the half-step velocity.
@@ -138,7 +144,7 @@ def build_neighbours(pos, radius, skin, nbr, n_nbr, shear, bond, new_nbr, new_n,
 
 
 @njit(cache=True)
-def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, kn, ks, mu, c0, r0, dt, force):
+def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_heal, dt, force):
     """Add the pair (normal + tangential) forces to ``force`` and update the pair history.
 
     Parameters
@@ -146,21 +152,33 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, kn, ks, mu, c0, r0, d
     pos, vel : (n, 2) float64 positions (m) and velocities (m/s).
     radius : (n,) float64 radii (m).
     nbr, n_nbr, shear, bond : Verlet list and history, updated in place (X_s, broken bonds).
-    kn, ks : float normal and shear stiffness (N/m per metre of thickness).
-    mu, c0, r0 : float friction coefficient, cohesion (N), bond-breaking strain.
+        ``bond``: 0 none, 1 tensile bond, 2 brittle bond (see module doc).
+    cmat : (n, 4) float64 per-element contact material [Kn (N/m), mu, C0 (N), r0]; a pair
+        uses the smaller of its two elements' values. A (1, 4) array gives every element
+        that row (uniform mechanics).
+    ks_ratio : float Ks / Kn.
+    c0_heal : float fraction of C0 that a contact without a bond (0) carries: 1 in the
+        frictional and bonded models (every contact is cohesive), 0 in the brittle model
+        (cohesion lives only on the initial bonds and is lost when they break).
     dt : float time step (s), for the X_s increment.
     force : (n, 2) float64, accumulated into (N).
 
     Returns
     -------
-    int number of bonds broken during this call.
+    int number of bonds broken in tension during this call.
     """
     n = pos.shape[0]
     nbroken = 0
+    layered = cmat.shape[0] > 1  # one row: every element has the same material
     for i in range(n):
         xi = pos[i, 0]
         yi = pos[i, 1]
         ri = radius[i]
+        ci = i if layered else 0
+        kni = cmat[ci, 0]
+        mui = cmat[ci, 1]
+        c0i = cmat[ci, 2]
+        r0i = cmat[ci, 3]
         fxi = 0.0
         fyi = 0.0
         for k in range(n_nbr[i]):
@@ -169,21 +187,28 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, kn, ks, mu, c0, r0, d
             dy = pos[j, 1] - yi
             rr = ri + radius[j]
             d2 = dx * dx + dy * dy
-            bonded = bond[i, k] != 0
-            if bonded:
+            b = bond[i, k]
+            cj = j if layered else 0
+            if b != 0:
                 d = np.sqrt(d2)
+                r0 = min(r0i, cmat[cj, 3])
                 if d - rr > r0 * rr:
                     bond[i, k] = 0
+                    b = 0
                     nbroken += 1
-                    bonded = False
                     if d >= rr:
                         shear[i, k] = 0.0
                         continue
             else:
                 if d2 >= rr * rr:
                     shear[i, k] = 0.0
+                    bond[i, k] = 0
                     continue
                 d = np.sqrt(d2)
+            kn = min(kni, cmat[cj, 0])
+            mu = min(mui, cmat[cj, 1])
+            c0 = min(c0i, cmat[cj, 2])
+            ks = ks_ratio * kn
             inv_d = 1.0 / d
             nx = dx * inv_d
             ny = dy * inv_d
@@ -192,9 +217,15 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, kn, ks, mu, c0, r0, d
             vt = (vel[j, 0] - vel[i, 0]) * (-ny) + (vel[j, 1] - vel[i, 1]) * nx
             xs = shear[i, k] + vt * dt
             fs = -ks * xs
-            cap = c0
+            cap = c0 if b != 0 else c0 * c0_heal
             if fn > 0.0:
                 cap += mu * fn
+            if b == 2 and (fs > cap or fs < -cap):
+                # a brittle bond that slips breaks for ever: cohesion and tension are lost
+                bond[i, k] = 0
+                cap = c0 * c0_heal
+                if fn > 0.0:
+                    cap += mu * fn
             if fs > cap:
                 fs = cap
                 xs = -cap / ks
@@ -345,7 +376,7 @@ def body_forces(vel, mass, eta, gravity, force):
 
 @njit(cache=True)
 def run_steps(n_steps, dt, pos, vel, force, radius, mass, inv_mass, eta, gravity,
-              kn, ks, mu, c0, r0, wall_kn, wall_mu,
+              cmat, ks_ratio, c0_heal, wall_kn, wall_ks, wall_mu,
               nbr, n_nbr, shear, bond, pos_ref, skin,
               new_nbr, new_n, new_shear, new_bond, cell_head, cell_next,
               walls, wall_vel, wall_shear, box, vmax_limit, check_every,
@@ -358,8 +389,8 @@ def run_steps(n_steps, dt, pos, vel, force, radius, mass, inv_mass, eta, gravity
     pos, vel, force : (n, 2) float64 state, updated in place. ``force`` must hold the forces
         of the current positions on entry (call :func:`compute_forces` once first).
     radius, mass, inv_mass, eta : (n,) float64.
-    gravity, kn, ks, mu, c0, r0 : float material constants (SI).
-    wall_kn, wall_mu : float wall stiffness (N/m) and friction coefficient.
+    gravity : float (m/s^2); cmat, ks_ratio, c0_heal : contact material (see pair_forces).
+    wall_kn, wall_ks, wall_mu : float wall stiffnesses (N/m) and friction coefficient.
     nbr ... cell_next : Verlet list, its history, its rebuild scratch (see build_neighbours).
     pos_ref : (n, 2) float64 positions at the last rebuild; skin : float (m). The list is
         rebuilt when an element has moved more than skin/2 since then.
@@ -422,10 +453,10 @@ def run_steps(n_steps, dt, pos, vel, force, radius, mass, inv_mass, eta, gravity
             wall_disp[0] = 0.0
             n_rebuilds += 1
         body_forces(vel, mass, eta, gravity, force)
-        n_broken += pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, kn, ks, mu, c0, r0,
-                                dt, force)
+        n_broken += pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio,
+                                c0_heal, dt, force)
         if nw > 0:
-            wall_forces_listed(pos, vel, radius, walls, wall_vel, wall_shear, wall_kn, ks,
+            wall_forces_listed(pos, vel, radius, walls, wall_vel, wall_shear, wall_kn, wall_ks,
                                wall_mu, dt, force, cand, n_cand)
         for i in range(n):
             vel[i, 0] += half * force[i, 0] * inv_mass[i]

@@ -15,6 +15,11 @@ import numpy as np
 from demseis.dem import _kernels as K
 from demseis.dem.types import Material
 from demseis.errors import InputError, SimulationError
+from demseis.parameters import MATERIAL_FIELDS, PARAMS
+
+
+#: contact models (declared in demseis.parameters)
+MODELS = PARAMS["contact_model"].choices
 
 
 def time_step(radius_min_m: float, density_kg_m3: float, kn_n_m: float) -> float:
@@ -36,23 +41,13 @@ def time_step(radius_min_m: float, density_kg_m3: float, kn_n_m: float) -> float
 
 
 def validate_material(material: Material) -> None:
-    """Raise :class:`InputError` naming the first out-of-range field of ``material``."""
-    checks = [
-        ("density_kg_m3", material.density_kg_m3 > 0, "> 0"),
-        ("kn_n_m", material.kn_n_m > 0, "> 0"),
-        ("ks_ratio", 0 < material.ks_ratio <= 10, "in (0, 10]"),
-        ("friction", 0 <= material.friction <= 10, "in [0, 10]"),
-        ("cohesion_n", material.cohesion_n >= 0, ">= 0"),
-        ("bond_strain", 0 < material.bond_strain < 1, "in (0, 1)"),
-        ("damping_scale", material.damping_scale >= 0, ">= 0"),
-        ("gravity_m_s2", material.gravity_m_s2 >= 0, ">= 0"),
-    ]
-    for name, ok, allowed in checks:
-        if not (ok and math.isfinite(getattr(material, name))):
-            raise InputError(f"Material.{name}={getattr(material, name)!r} is out of range "
-                             f"(allowed {allowed})")
-    if material.model not in ("frictional", "bonded"):
-        raise InputError(f"Material.model={material.model!r}; allowed 'frictional' or 'bonded'")
+    """Raise :class:`InputError` naming the first out-of-range field of ``material``.
+
+    The ranges are the declarations of :mod:`demseis.parameters` (the ones a config is checked
+    against when it is loaded).
+    """
+    for field, name in MATERIAL_FIELDS.items():
+        PARAMS[name].check_value(getattr(material, field), f"Material.{field}", InputError)
 
 
 class Engine:
@@ -104,6 +99,11 @@ class Engine:
         self.mu = float(material.friction if friction is None else friction)
         self.c0 = float(material.cohesion_n if cohesion_n is None else cohesion_n)
         self.r0 = float(material.bond_strain)
+        self.ks_ratio = float(material.ks_ratio)
+        # brittle model: cohesion only on the initial bonds (lost when they break)
+        self.c0_heal = 0.0 if material.model == "brittle" else 1.0
+        # (1, 4): uniform mechanics (one row for every element); (n, 4) once set per element
+        self.cmat = self._material_row()[None, :].copy()
         self.wall_mu = float(self.mu if wall_friction is None else wall_friction)
         rmax = float(self.radius.max()) if n else 1.0
         self.skin = float(skin_m) if skin_m is not None else max(
@@ -125,6 +125,23 @@ class Engine:
         self._forces_valid = False
 
     # ------------------------------------------------------------------ set-up helpers
+    def _material_row(self) -> np.ndarray:
+        """[Kn, mu, C0, r0] of the engine's material (with the constructor's overrides)."""
+        return np.array([self.kn, self.mu, self.c0, self.r0])
+
+    def set_element_material(self, cmat: np.ndarray) -> None:
+        """Per-element contact material: (n, 4) [Kn (N/m), mu, C0 (N), r0]; a pair uses the
+        smaller value of its two elements. Kn above the engine's Kn needs a smaller dt."""
+        cmat = np.ascontiguousarray(cmat, dtype=np.float64)
+        if cmat.shape != (self.n, 4) or not np.all(np.isfinite(cmat)) or np.any(cmat[:, 0] <= 0):
+            raise InputError(f"cmat must be a finite ({self.n}, 4) array with Kn > 0, got shape "
+                             f"{cmat.shape}")
+        if cmat[:, 0].max() > self.kn * (1 + 1e-12):
+            raise InputError(f"per-element Kn up to {cmat[:, 0].max():.3g} N/m exceeds the "
+                             f"engine's Kn {self.kn:.3g} N/m that sets dt")
+        self.cmat = cmat.copy()
+        self._forces_valid = False
+
     def _make_eta(self, eta, n):
         if eta is None:
             return np.full(n, self.dt * self.material.damping_scale)
@@ -199,9 +216,11 @@ class Engine:
         self._refresh_wall_candidates()
         self._forces_valid = False
 
-    def bond_initial_contacts(self, tol_frac: float = 0.05) -> int:
-        """Bond every listed pair with d < (r_i + r_j)(1 + tol_frac) (the bonded model).
+    def bond_initial_contacts(self, tol_frac: float = 0.05, flag: int = 1) -> int:
+        """Bond every listed pair with d < (r_i + r_j)(1 + tol_frac).
 
+        ``flag`` 1: tensile bonds (the bonded model); 2: brittle bonds (the brittle model:
+        broken in tension or in shear, and the cohesion goes with them).
         Returns the number of bonds made.
         """
         self.rebuild()
@@ -213,7 +232,7 @@ class Engine:
             js = self.nbr[i, :m]
             d = np.hypot(*(self.pos[js] - self.pos[i]).T)
             ok = d < (self.radius[i] + self.radius[js]) * (1 + tol_frac)
-            self.bond[i, :m] = ok
+            self.bond[i, :m] = ok * np.uint8(flag)
             nb += int(ok.sum())
         return nb
 
@@ -222,8 +241,7 @@ class Engine:
         beyond what one evaluation does)."""
         K.body_forces(self.vel, self.mass, self.eta, self.material.gravity_m_s2, self.force)
         K.pair_forces(self.pos, self.vel, self.radius, self.nbr, self.n_nbr, self.shear,
-                      self.bond, self.kn, self.ks, self.mu, self.c0, self.r0, self.dt,
-                      self.force)
+                      self.bond, self.cmat, self.ks_ratio, self.c0_heal, self.dt, self.force)
         if self.walls.shape[0]:
             K.wall_forces(self.pos, self.vel, self.radius, self.walls, self.wall_vel,
                           self.wall_shear, self.kn, self.ks, self.wall_mu, self.dt, self.force)
@@ -241,7 +259,7 @@ class Engine:
             st, k, bad, nreb, nbrk = K.run_steps(
                 n_steps - done, self.dt, self.pos, self.vel, self.force, self.radius,
                 self.mass, self.inv_mass, self.eta, self.material.gravity_m_s2,
-                self.kn, self.ks, self.mu, self.c0, self.r0, self.kn, self.wall_mu,
+                self.cmat, self.ks_ratio, self.c0_heal, self.kn, self.ks, self.wall_mu,
                 self.nbr, self.n_nbr, self.shear, self.bond, self.pos_ref, self.skin,
                 self._new_nbr, self._new_n, self._new_shear, self._new_bond,
                 self._cell_head, self._cell_next,
@@ -320,6 +338,8 @@ class Engine:
         mass = self.material.density_kg_m3 * math.pi * radius**2
         self.mass = np.concatenate([self.mass, mass])
         self.inv_mass = 1.0 / self.mass
+        if self.cmat.shape[0] > 1:
+            self.cmat = np.vstack([self.cmat, np.tile(self._material_row(), (m, 1))])
         if self._eta_default is None or np.ndim(self._eta_default) == 0:
             add_eta = self._make_eta(self._eta_default, m)
         else:
@@ -335,4 +355,35 @@ class Engine:
         self.bond[:n] = old[3]
         self.wall_shear = np.vstack([self.wall_shear, np.zeros((m, self.walls.shape[0]))])
         self._wall_cand = np.zeros((self.walls.shape[0], n + m), np.int32)
+        self.rebuild()
+
+    def remove_elements(self, keep: np.ndarray) -> None:
+        """Drop the elements where ``keep`` is False (erosion); the others keep their order,
+        state and pair history (pairs with a removed element are dropped)."""
+        keep = np.asarray(keep, dtype=bool).reshape(-1)
+        if keep.shape[0] != self.n:
+            raise InputError(f"keep has {keep.shape[0]} entries; expected {self.n}")
+        if keep.all():
+            return
+        new_index = np.cumsum(keep) - 1
+        new_index[~keep] = -1
+        old_nbr, old_n = self.nbr[keep], self.n_nbr[keep]
+        old_shear, old_bond = self.shear[keep], self.bond[keep]
+        cols = np.arange(self.capacity)[None, :]
+        listed = cols < old_n[:, None]
+        mapped = np.where(listed, new_index[old_nbr], -1)
+        valid = mapped >= 0
+        # stable compaction of every row: valid entries first, in their old order
+        order = np.argsort(~valid, axis=1, kind="stable")
+        for name in ("pos", "radius", "mass", "inv_mass", "eta", "vel", "force", "wall_shear"):
+            setattr(self, name, np.ascontiguousarray(getattr(self, name)[keep]))
+        if self.cmat.shape[0] > 1:
+            self.cmat = np.ascontiguousarray(self.cmat[keep])
+        m = int(keep.sum())
+        self._alloc_lists(m)
+        self.n_nbr[:] = valid.sum(axis=1)
+        self.nbr[:] = np.take_along_axis(np.where(valid, mapped, 0), order, axis=1)
+        self.shear[:] = np.take_along_axis(np.where(valid, old_shear, 0.0), order, axis=1)
+        self.bond[:] = np.take_along_axis(np.where(valid, old_bond, 0), order, axis=1)
+        self._wall_cand = np.zeros((self.walls.shape[0], m), np.int32)
         self.rebuild()

@@ -1,11 +1,20 @@
-"""Normal faulting of an assembly by moving its basement, with syn-tectonic sedimentation.
+"""Faulting of an assembly by moving its basement blocks, with syn-tectonic sedimentation.
 
-Geometry (dip towards +x; ``dip_direction="left"`` is run mirrored and mirrored back):
+The basement is described by a :class:`demseis.dem.basement.FaultSystem` (a
+:class:`NormalFault` is the one-fault case). Its blocks become walls that move with them:
 
-- fixed: the left wall ``x = 0``, the footwall base ``y = 0, x <= x_f`` and the footwall's
-  fault face, the segment from ``(x_f, 0)`` down along the dip;
-- moving down-dip at ``speed * (cos d, -sin d)``: the hanging-wall base (from the fault to the
-  right edge) and the right wall, until the vertical throw reaches ``throw_m``.
+- the left wall ``x = 0`` moves with block 0, the right wall ``x = width`` with the last block;
+- every block's top (``y = 0`` between its faults; the outer ends reach ``r_max`` past the
+  side walls) moves with the block;
+- every fault has a face along its plane from ``(x_f, 0)`` downwards, one slip plus
+  ``4 r_max`` long: a normal or listric fault's face belongs to its footwall (it is exposed as
+  the hanging wall drops), a reverse fault's to its hanging wall (it overhangs the footwall).
+  A listric face is a polyline of chords of its arc (< 2 degrees each).
+
+For one normal fault dipping right this is the classic set-up: fixed left wall, footwall base
+and fault face; the hanging-wall base and right wall moving down-dip at
+``speed * (cos d, -sin d)``. A system whose faults all dip left is run mirrored and mirrored
+back (so a left-dipping fault gives exactly the mirror of a right-dipping one).
 
 Sedimentation: at 1/4 and 1/2 of each interval between snapshots, wherever the top surface
 lies below the initial surface (``height_m``), new elements of that interval's growth layer fill
@@ -15,31 +24,34 @@ as dense as the pre-kinematic ones), get new ids and ``deposited=True``, and set
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from demseis.dem.assembly import Assembly
+from demseis.dem.basement import (BlockMotion, FaultSystem, block_kinematics, check_fault_fields,
+                                  validate_system)
 from demseis.dem.engine import Engine, time_step, validate_material
 from demseis.dem.types import Material, NormalFault
 from demseis.types import Snapshot
 from demseis.errors import InputError
+from demseis.parameters import PARAMS
 
 
 def validate_fault(fault: NormalFault, width_m: float) -> None:
     """Raise :class:`InputError` naming the first bad field of ``fault``."""
-    if not (0 < fault.x_m < width_m):
-        raise InputError(f"NormalFault.x_m={fault.x_m} must lie inside (0, {width_m}) m")
-    if not (10.0 <= fault.dip_deg <= 80.0):
-        raise InputError(f"NormalFault.dip_deg={fault.dip_deg} is out of range (allowed 10-80)")
-    if not (math.isfinite(fault.throw_m) and fault.throw_m >= 0):
-        raise InputError(f"NormalFault.throw_m={fault.throw_m} must be >= 0")
-    if fault.dip_direction not in ("right", "left"):
-        raise InputError(f"NormalFault.dip_direction={fault.dip_direction!r}; allowed "
-                         "'right' or 'left'")
-    if not (math.isfinite(fault.speed_m_s) and 0 < fault.speed_m_s <= 100):
-        raise InputError(f"NormalFault.speed_m_s={fault.speed_m_s} is out of range (0, 100]")
+    check_fault_fields("NormalFault", fault, width_m)
+    PARAMS["wall_speed_m_s"].check_value(fault.speed_m_s, "NormalFault.speed_m_s", InputError)
+
+
+def save_snapshots(path: str, snaps: list[Snapshot]) -> None:
+    """Write snapshots to a compressed ``.npz``: ``<field>_<k>`` for ids, xy, radius, layer,
+    deposited of snapshot k, and ``throw_m`` (one per snapshot)."""
+    np.savez_compressed(path, **{f"{k}_{i}": getattr(s, k) for i, s in enumerate(snaps)
+                                 for k in ("ids", "xy", "radius", "layer", "deposited")},
+                        throw_m=np.array([s.throw_m for s in snaps]))
 
 
 def surface_profile(xy: np.ndarray, radius: np.ndarray, x_edges: np.ndarray) -> np.ndarray:
@@ -139,28 +151,146 @@ def _clear_of(pos: np.ndarray, radius: np.ndarray, new_xy: np.ndarray, new_r: np
     return ok
 
 
-def simulate(asm: Assembly, fault: NormalFault, material: Material = Material(), *,
-             n_snapshots: int = 6, sedimentation: bool = True,
+def as_system(fault: NormalFault | FaultSystem) -> FaultSystem:
+    """The :class:`FaultSystem` of ``fault`` (a NormalFault is one normal fault)."""
+    if isinstance(fault, FaultSystem):
+        return fault
+    if isinstance(fault, NormalFault):
+        from demseis.dem.basement import BasementFault
+
+        return FaultSystem((BasementFault(fault.x_m, fault.dip_deg, fault.throw_m,
+                                          fault.dip_direction, "normal"),),
+                           speed_m_s=fault.speed_m_s, structure="single")
+    raise InputError(f"fault must be a NormalFault or a FaultSystem, got {type(fault).__name__}")
+
+
+def _split(p0: np.ndarray, p1: np.ndarray, max_len: float) -> list[np.ndarray]:
+    """Segments [x0, y0, x1, y1] that cut p0 -> p1 into pieces no longer than max_len."""
+    k = max(int(math.ceil(float(np.hypot(*(p1 - p0))) / max_len)), 1)
+    pts = p0 + (p1 - p0) * np.linspace(0.0, 1.0, k + 1)[:, None]
+    return [np.r_[pts[j], pts[j + 1]] for j in range(k)]
+
+
+def basement_walls(system: FaultSystem, motions: list[BlockMotion], width_m: float,
+                   height_m: float, rmax: float) -> tuple[np.ndarray, np.ndarray]:
+    """Walls of the basement blocks before faulting, and the block each belongs to.
+
+    Order: left wall, then per block its top and the face of the fault on its right, then the
+    right wall. Walls of a rotating block are cut into pieces of at most
+    ``max(4 r_max, min(width, height) / 8)`` (each piece translates between wall updates).
+
+    Returns
+    -------
+    walls : (nw, 4) float64 [x0, y0, x1, y1]; owner : (nw,) int64 block index.
+    """
+    top = 3.0 * height_m + 10 * rmax
+    piece = max(4 * rmax, min(width_m, height_m) / 8)
+    walls: list[np.ndarray] = []
+    owner: list[int] = []
+
+    def add(b: int, seg: np.ndarray) -> None:
+        if motions[b].rotates:
+            for s in _split(seg[:2], seg[2:], piece):
+                walls.append(s)
+                owner.append(b)
+        else:
+            walls.append(seg)
+            owner.append(b)
+
+    last = len(motions) - 1
+    if motions[0].rotates:  # split the lower side wall finely, the rest in one piece
+        add(0, np.array([0.0, 0.0, 0.0, 1.5 * height_m]))
+        walls.append(np.array([0.0, 1.5 * height_m, 0.0, top]))
+        owner.append(0)
+    else:
+        add(0, np.array([0.0, 0.0, 0.0, top]))
+    for b, m in enumerate(motions):
+        x0 = -rmax if b == 0 else m.x_left_m
+        x1 = width_m + rmax if b == last else m.x_right_m
+        add(b, np.array([x0, 0.0, x1, 0.0]))
+        if b == last:
+            break
+        f = system.faults[b]
+        d = math.radians(f.dip_deg)
+        cd, sd = math.cos(d), math.sin(d)
+        a = f.sign
+        xf = f.x_m
+        if f.kind == "listric":
+            fw = b if a > 0 else b + 1
+            th_end = min(f.slip_m() / f.radius_m + 4 * rmax / f.radius_m, d)
+            k = max(int(math.ceil(math.degrees(th_end) / 2.0)), 1)
+            phi = d - np.linspace(0.0, th_end, k + 1)
+            cx, cy = xf + a * f.radius_m * sd, f.radius_m * cd
+            px = cx - a * f.radius_m * np.sin(phi)
+            py = cy - f.radius_m * np.cos(phi)
+            px[0], py[0] = xf, 0.0
+            for j in range(k):
+                walls.append(np.array([px[j], py[j], px[j + 1], py[j + 1]]))
+                owner.append(fw)
+            continue
+        L = f.slip_m() + 4 * rmax
+        hw, fw = (b + 1, b) if a > 0 else (b, b + 1)
+        add(fw if f.kind == "normal" else hw, np.array([xf, 0.0, xf + a * L * cd, -L * sd]))
+    if motions[last].rotates:
+        add(last, np.array([width_m, 0.0, width_m, 1.5 * height_m]))
+        walls.append(np.array([width_m, 1.5 * height_m, width_m, top]))
+        owner.append(last)
+    else:
+        add(last, np.array([width_m, 0.0, width_m, top]))
+    return np.array(walls), np.array(owner, dtype=np.int64)
+
+
+def _layer_cmat(asm: Assembly, layer_materials: Sequence[Material]) -> tuple[np.ndarray, float]:
+    """(n, 4) per-element [Kn, mu, C0, r0] from one Material per layer, and the largest Kn."""
+    if len(layer_materials) != asm.n_layers:
+        raise InputError(f"layer_materials has {len(layer_materials)} entries; expected one per "
+                         f"layer ({asm.n_layers})")
+    rows = np.empty((asm.n_layers, 4))
+    for k, m in enumerate(layer_materials):
+        if not isinstance(m, Material):
+            raise InputError(f"layer_materials[{k}] must be a Material, got {type(m).__name__}")
+        validate_material(m)
+        rows[k] = (m.kn_n_m, m.friction, m.cohesion_n, m.bond_strain)
+    return rows[asm.layer], float(rows[:, 0].max())
+
+
+def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material = Material(),
+             *, n_snapshots: int = 6, sedimentation: bool = True,
              rng: np.random.Generator | int | None = None,
              progress: Callable[[float], None] | None = None,
-             settle_steps: int | None = None) -> list[Snapshot]:
-    """Fault ``asm`` by moving the hanging-wall base and side wall down-dip.
+             settle_steps: int | None = None,
+             erosion_level_m: float | None = None,
+             layer_materials: Sequence[Material] | None = None) -> list[Snapshot]:
+    """Fault ``asm`` by moving its basement blocks (see the module docstring).
 
     Parameters
     ----------
     asm : Assembly from :func:`demseis.dem.build_assembly`.
-    fault : NormalFault (fault position, dip, throw, dip direction, wall speed).
+    fault : NormalFault (one normal fault) or FaultSystem (1-5 faults, normal, reverse,
+        listric; :mod:`demseis.dem.basement`).
     material : contact model and constants; ``model="bonded"`` bonds initial contacts.
-    n_snapshots : >= 2; snapshot k is taken at throw k / (n_snapshots - 1) * fault.throw_m.
-    sedimentation : fill hanging-wall accommodation with growth layers.
+    n_snapshots : >= 2; snapshot k is taken when every fault has k / (n_snapshots - 1) of its
+        slip (for planar faults: of its throw).
+    sedimentation : fill accommodation below the initial surface with growth layers.
     rng : Generator or int seed (sediment radii/positions).
     progress : optional callable(fraction of the run done).
     settle_steps : steps of relaxation in the faulting walls before snapshot 0 (default
         enough for the contacts to load up: ~2 s of model time).
+    erosion_level_m : if given, an erosion surface: at every sedimentation time and before
+        every snapshot, elements whose centre lies above this elevation are removed (their ids
+        no longer appear). Use ``asm.height_m`` to keep uplifted material inside the sample
+        grid. None (default): nothing is removed.
+    layer_materials : optional mechanical stratigraphy, one Material per pre-kinematic layer
+        (``asm.n_layers``; see :func:`demseis.dem.strata.layer_materials`). Their contact
+        fields (``kn_n_m``, ``friction``, ``cohesion_n``, ``bond_strain``) apply to the
+        elements of that layer (a contact takes the smaller value of its two elements);
+        ``material`` keeps the model, ``ks_ratio``, density, damping, gravity, the walls and
+        the growth layers. dt follows the largest Kn.
 
     Returns
     -------
-    list of Snapshot, ``n_snapshots`` long.
+    list of Snapshot, ``n_snapshots`` long. ``Snapshot.throw_m`` is the master fault's throw
+    (the fault with the largest slip); :meth:`FaultSystem.throws_at` gives every fault's.
 
     Raises
     ------
@@ -168,44 +298,56 @@ def simulate(asm: Assembly, fault: NormalFault, material: Material = Material(),
         NaN, kinetic-energy blow-up, or an element leaving the box.
     """
     validate_material(material)
-    validate_fault(fault, asm.width_m)
+    if isinstance(fault, NormalFault):
+        validate_fault(fault, asm.width_m)
+    system = as_system(fault)
+    validate_system(system, asm.width_m)
     if not isinstance(n_snapshots, (int, np.integer)) or n_snapshots < 2:
         raise InputError(f"n_snapshots={n_snapshots!r} must be an integer >= 2")
+    if erosion_level_m is not None and not math.isfinite(erosion_level_m):
+        raise InputError(f"erosion_level_m={erosion_level_m!r} must be a finite elevation")
     if rng is None:
         rng = np.random.default_rng(0)
     elif isinstance(rng, (int, np.integer)):
         rng = np.random.default_rng(int(rng))
     W, H = asm.width_m, asm.height_m
-    mirror = fault.dip_direction == "left"
-    xf = W - fault.x_m if mirror else fault.x_m
+    mirror = all(f.dip_direction == "left" for f in system.faults)
+    if mirror:
+        system = system.mirrored(W)
     xy0 = asm.xy.copy()
     if mirror:
         xy0[:, 0] = W - xy0[:, 0]
-    dip = math.radians(fault.dip_deg)
-    cd, sd = math.cos(dip), math.sin(dip)
+    master = system.faults[system.master]
     rmin, rmax = asm.radius_min_m, asm.radius_max_m
+    motions = block_kinematics(system, W)
+    rotating = [b for b, m in enumerate(motions) if m.rotates]
 
+    cmat = None
+    if layer_materials is not None:
+        cmat, kn_max = _layer_cmat(asm, layer_materials)
+        if kn_max > material.kn_n_m:
+            material = dataclasses.replace(material, kn_n_m=kn_max)
     # dt from Eq. 5 with the smallest radius that can ever occur (sediment included)
     dt = time_step(min(rmin, float(asm.radius.min())), material.density_kg_m3,
                    material.kn_n_m)
     eng = Engine(xy0, asm.radius, material, dt_s=dt)
+    if cmat is not None:
+        eng.set_element_material(cmat)
 
-    dip_total = fault.throw_m / sd
-    L = dip_total + 4 * rmax
+    dip_total = master.slip_m()
+    walls0, owner = basement_walls(system, motions, W, H, rmax)
+    eng.set_walls(walls0)
+    corners = np.concatenate([m.displace([[m.x_left_m, 0.0], [m.x_right_m, 0.0]], dip_total)
+                              for m in motions])
     top = 3.0 * H + 10 * rmax
-    walls = np.array([
-        [0.0, 0.0, 0.0, top],                       # left wall (fixed)
-        [-rmax, 0.0, xf, 0.0],                      # footwall base (fixed)
-        [xf, 0.0, xf + L * cd, -L * sd],            # footwall fault face (fixed)
-        [xf, 0.0, W + rmax, 0.0],                   # hanging-wall base (moves)
-        [W, 0.0, W, top],                           # hanging-wall side wall (moves)
-    ])
-    eng.set_walls(walls)
-    eng.box = np.array([-4 * rmax, W + dip_total * cd + 4 * rmax,
-                        -fault.throw_m - 4 * rmax, top])
-    eng.vmax_limit = max(100.0, 20 * fault.speed_m_s)
+    eng.box = np.array([min(0.0, corners[:, 0].min()) - 4 * rmax,
+                        max(W, corners[:, 0].max()) + 4 * rmax,
+                        min(0.0, corners[:, 1].min()) - 4 * rmax, top])
+    eng.vmax_limit = max(100.0, 20 * system.speed_m_s)
     if material.model == "bonded":
         eng.bond_initial_contacts()
+    elif material.model == "brittle":
+        eng.bond_initial_contacts(tol_frac=0.0, flag=2)  # touching pairs: no initial pull
     else:
         eng.rebuild()
 
@@ -219,8 +361,8 @@ def simulate(asm: Assembly, fault: NormalFault, material: Material = Material(),
     if settle_steps is None:
         settle_steps = int(2.0 / eng.dt)
     n_interval = n_snapshots - 1
-    steps_per_interval = max(int(math.ceil(dip_total / n_interval / (fault.speed_m_s * eng.dt))),
-                             1) if fault.throw_m > 0 else 0
+    steps_per_interval = max(int(math.ceil(dip_total / n_interval / (system.speed_m_s * eng.dt))),
+                             1) if dip_total > 0 else 0
     total_steps = settle_steps + steps_per_interval * n_interval
     v_dip = dip_total / n_interval / (steps_per_interval * eng.dt) if steps_per_interval else 0.0
     done = 0
@@ -233,30 +375,79 @@ def simulate(asm: Assembly, fault: NormalFault, material: Material = Material(),
     done += settle_steps
     report()
 
+    def erode() -> None:
+        nonlocal ids, layer, deposited
+        if erosion_level_m is None:
+            return
+        keep = eng.pos[:, 1] <= erosion_level_m
+        if not keep.all():
+            eng.remove_elements(keep)
+            ids, layer, deposited = ids[keep], layer[keep], deposited[keep]
+
     def snap(k: int, applied_dip: float) -> Snapshot:
+        erode()
         xy = eng.pos.copy()
         if mirror:
             xy[:, 0] = W - xy[:, 0]
-        return Snapshot(index=k, step=eng.steps, throw_m=float(applied_dip * sd), ids=ids.copy(),
-                        xy=xy, radius=eng.radius.copy(), layer=layer.copy(),
+        return Snapshot(index=k, step=eng.steps, throw_m=float(master.throw_at_slip(applied_dip)),
+                        ids=ids.copy(), xy=xy, radius=eng.radius.copy(), layer=layer.copy(),
                         deposited=deposited.copy())
 
+    def side_x(b: int, applied_dip: float) -> float:
+        """x of the side wall of end block b within the model height (inner-most point)."""
+        m = motions[b]
+        xw = 0.0 if b == 0 else W
+        if not m.rotates:
+            return xw + applied_dip * m.velocity[0]
+        p = m.displace([[xw, 0.0], [xw, H]], applied_dip)[:, 0]
+        return float(p.max() if b == 0 else p.min())
+
+    rot_walls = np.flatnonzero(np.isin(owner, rotating))
+    chunk = 50
+
+    def run_part(nsteps: int, start_dip: float) -> None:
+        """Run nsteps with the walls moving; rotating walls are re-placed every ``chunk``."""
+        if not rotating:
+            eng.run(nsteps)
+            return
+        left = nsteps
+        at = start_dip
+        while left > 0:
+            k = min(chunk, left)
+            nxt = at + k * eng.dt * v_dip
+            for w in rot_walls:
+                m = motions[owner[w]]
+                ends = walls0[w].reshape(2, 2)
+                now = m.displace(ends, at)
+                then = m.displace(ends, nxt)
+                eng.walls[w] = now.ravel()
+                eng.wall_vel[w] = (then - now).mean(axis=0) / (k * eng.dt)
+            eng._refresh_wall_candidates()
+            eng.run(k)
+            left -= k
+            at = nxt
+
     snaps = [snap(0, 0.0)]
-    moving = np.array([3, 4])
     applied = 0.0
     for k in range(1, n_snapshots):
         grew = False
         q = steps_per_interval // 4
         for part, nsteps in enumerate((q, q, steps_per_interval - 2 * q)):
             eng.wall_vel[:] = 0.0
-            eng.wall_vel[moving] = (v_dip * cd, -v_dip * sd)
-            eng.run(nsteps)
+            for w in range(owner.size):
+                vx, vy = motions[owner[w]].velocity
+                if vx != 0.0 or vy != 0.0:
+                    eng.wall_vel[w] = (v_dip * vx, v_dip * vy)
+            run_part(nsteps, applied)
             done += nsteps
             applied += nsteps * eng.dt * v_dip
             report()
+            if part < 2:
+                erode()
             if part < 2 and sedimentation:
                 n_before = eng.n
-                added = _deposit(eng, 0.0, W + applied * cd, H, xy0, asm.radius, W, H, rng)
+                added = _deposit(eng, side_x(0, applied), side_x(len(motions) - 1, applied), H,
+                                 xy0, asm.radius, W, H, rng)
                 if added:
                     ids = np.concatenate([ids, np.arange(next_id, next_id + added)])
                     next_id += added

@@ -10,10 +10,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from demseis.parameters import MATERIAL_FIELDS, PARAMS
+
+
+def _default(field: str) -> object:
+    return PARAMS[MATERIAL_FIELDS.get(field, field)].default
+
 
 @dataclass(frozen=True)
 class Material:
     """Mechanical parameters of the elements and their contacts (SI units).
+
+    Defaults and allowed ranges are declared once in :mod:`demseis.parameters` (``demseis
+    params``); :func:`demseis.dem.engine.validate_material` checks against them.
 
     Attributes
     ----------
@@ -25,8 +34,11 @@ class Material:
         5e7 N is ~10% of mu * Fn at 1 km depth: brittle near the surface, frictional at depth;
         with C0 = 0 a 45 deg basement fault only makes a broad monocline (docs/dem.md).
     bond_strain : bond-breaking strain r0 (bond breaks when d - R > r0 * R).
-    model : ``"frictional"`` (all bonds start broken) or ``"bonded"`` (bonds between initial
-        neighbours).
+    model : ``"frictional"`` (all bonds start broken; every contact, new or old, carries C0:
+        cohesion heals, so deformation stays distributed: the ductile end), ``"bonded"``
+        (tensile bonds between initial neighbours) or ``"brittle"`` (bonds between initial
+        neighbours that break in tension at r0 or in shear at C0 + mu Fn; C0 lives only on
+        the bonds, new contacts are frictional: strain softening that localises slip).
     damping_scale : global viscous damping eta = dt * damping_scale (N s / m per second of dt).
         The paper's 3.0e9 makes the terminal sinking speed of the smallest element (m g / eta,
         ~1.4 m/s at Kn = 1e10) slower than the basement subsides, so the hanging wall detaches
@@ -34,15 +46,15 @@ class Material:
     gravity_m_s2 : gravitational acceleration.
     """
 
-    density_kg_m3: float = 2500.0
-    kn_n_m: float = 1.0e10
-    ks_ratio: float = 0.5
-    friction: float = 0.4
-    cohesion_n: float = 5.0e7
-    bond_strain: float = 0.02
-    model: str = "frictional"
-    damping_scale: float = 3.0e8
-    gravity_m_s2: float = 9.81
+    density_kg_m3: float = _default("density_kg_m3")
+    kn_n_m: float = _default("kn_n_m")
+    ks_ratio: float = _default("ks_ratio")
+    friction: float = _default("friction")
+    cohesion_n: float = _default("cohesion_n")
+    bond_strain: float = _default("bond_strain")
+    model: str = _default("model")
+    damping_scale: float = _default("damping_scale")
+    gravity_m_s2: float = _default("gravity_m_s2")
 
 
 @dataclass(frozen=True)
@@ -60,7 +72,14 @@ class NormalFault:
     """
 
     x_m: float = 2500.0
-    dip_deg: float = 45.0
-    throw_m: float = 450.0
-    dip_direction: str = "right"
-    speed_m_s: float = 5.0
+    dip_deg: float = _default("dip_deg")
+    throw_m: float = _default("throw_m")
+    dip_direction: str = _default("dip_direction")
+    speed_m_s: float = _default("wall_speed_m_s")
+
+
+#: A brittle cover, calibrated at seed scale (5 km x 2.77 km, 45 deg, 450 m throw): bonds
+#: between touching neighbours that break in tension (r0 = 0.005) or shear (C0 = 1.4e9 N +
+#: mu Fn), cohesion lost with them. The mid-depth horizon steps 299 m (0.66 of the throw)
+#: within 100 m across a ~70 deg master fault (docs/dem.md). ``Material()`` is the ductile end.
+BRITTLE = Material(model="brittle", cohesion_n=1.4e9, bond_strain=0.005)

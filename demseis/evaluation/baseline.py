@@ -31,6 +31,7 @@ tune it with the ODS threshold that :func:`demseis.evaluation.scoring.score` rep
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -216,3 +217,78 @@ def baseline_fault_probability(section: ArrayLike, method: str = "dip") -> NDArr
     if method == "semblance":
         return semblance_fault_probability(section)
     raise InputError(f"method: must be one of {METHODS}, got {method!r}")
+
+
+def baseline_store(store: Any, out: str, *, method: str = "dip", array: str = "seismic",
+                   sigma_tensor_px: float = 4.0,
+                   semblance: SemblanceBaseline | None = None, overwrite: bool = False,
+                   progress: bool = False) -> tuple[int, int]:
+    """Run the baseline over every completed sample of a store; write (N, H, W) probabilities.
+
+    Parameters
+    ----------
+    store : str, Path or object with a ``path`` attribute (e.g. :class:`demseis.Store`)
+    out : str
+        ``PATH.npy`` for a NumPy file, anything else for a Zarr array. Samples of incomplete
+        shards are 0. The output is written under a temporary name and renamed.
+    method : ``"dip"`` (:func:`dip_fault_probability`) or ``"semblance"``
+        (:func:`semblance_fault_probability` with ``semblance``).
+    array : input array of the store.
+    sigma_tensor_px : structure-tensor smoothing of the dip method (pixels).
+    overwrite : replace an existing ``out``.
+
+    Returns
+    -------
+    (done, n) : samples computed and samples in the store.
+    """
+    import os
+    import shutil
+    import sys
+
+    from demseis.datasets.read import open_sections
+
+    if method not in ("dip", "semblance"):
+        raise InputError(f"method = {method!r}; allowed: 'dip' or 'semblance'")
+    cfg = semblance or SemblanceBaseline()
+    if method == "dip":
+        settings: dict[str, Any] = {"method": "dip", "sigma_tensor_px": sigma_tensor_px}
+
+        def detect(sec: np.ndarray) -> np.ndarray:
+            return dip_fault_probability(sec, sigma_tensor_px=sigma_tensor_px)
+    else:
+        settings = {"method": "semblance", **cfg.__dict__}
+
+        def detect(sec: np.ndarray) -> np.ndarray:
+            return semblance_fault_probability(sec, cfg)
+    path = str(getattr(store, "path", store))
+    seis, valid = open_sections(path, array)
+    if os.path.exists(out) and not overwrite:
+        raise InputError(f"--out {out!r} exists; pass --overwrite to replace it")
+    n, h, w = (int(v) for v in seis.shape)
+    if out.endswith(".npy"):
+        dest: Any = np.lib.format.open_memmap(out + ".part.npy", mode="w+", dtype=np.float32,
+                                              shape=(n, h, w))
+    else:
+        import zarr
+
+        dest = zarr.create_array(out + ".part", shape=(n, h, w), chunks=(1, h, w),
+                                 dtype="float32", fill_value=0.0, overwrite=True)
+        dest.attrs["demseis_baseline"] = {"threshold": 0.5, **settings}
+    done = np.flatnonzero(valid)
+    if progress:
+        from tqdm import tqdm
+
+        done_iter: Any = tqdm(done, desc="baseline", unit="sample", file=sys.stderr)
+    else:
+        done_iter = done
+    for i in done_iter:
+        dest[int(i)] = detect(np.asarray(seis[int(i)]))
+    if isinstance(dest, np.memmap):  # a new memmap is zero-filled: skipped samples stay 0
+        dest.flush()
+        del dest
+        os.replace(out + ".part.npy", out)
+    else:
+        if os.path.exists(out):
+            shutil.rmtree(out)
+        os.replace(out + ".part", out)
+    return int(done.size), n

@@ -68,6 +68,8 @@ __all__ = [
     "disk_footprint",
     "metrics_from_counts",
     "score",
+    "score_store",
+    "StoreScore",
     "summarise",
 ]
 
@@ -698,3 +700,142 @@ def format_table(rows: list[dict[str, Any]], columns: tuple[str, ...] = TABLE_CO
         lines.append("  ".join(x.ljust(wd) if i < 2 else x.rjust(wd)
                                for i, (x, wd) in enumerate(zip(b, widths))))
     return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------------------------
+# The whole store-level scoring: what ``demseis.score`` and ``demseis score`` do
+# --------------------------------------------------------------------------------------------
+
+#: columns of the ``<prefix>.csv`` file :meth:`StoreScore.write` writes
+CSV_COLUMNS = ("by", "group", "lo", "hi", "n_samples", "precision", "recall", "f1", "iou", "ap",
+               "ods_f1", "chance_ap", "tp", "fp", "fn", "tp_truth")
+
+
+def json_safe(v: Any) -> Any:
+    """``v`` with NumPy scalars as Python ones and non-finite floats as null / "inf" / "-inf"."""
+    if isinstance(v, dict):
+        return {k: json_safe(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [json_safe(x) for x in v]
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float) and not np.isfinite(v):
+        return None if np.isnan(v) else ("inf" if v > 0 else "-inf")
+    return v
+
+
+@dataclass
+class StoreScore:
+    """Scores of predictions against a store's fault labels (see :func:`score_store`).
+
+    Attributes
+    ----------
+    overall : ScoreResult
+        Pooled over every scored sample (``overall.per_sample`` has one row per sample).
+    rows : list of dict
+        One row per group (the first is ``by == "all"``), see :func:`group_rows`.
+    sample_index : ndarray (M,), int64
+        The store index of each scored sample.
+    params : dict[str, ndarray]
+        The store's per-sample parameters of the scored samples, each (M,).
+    counts : SampleCounts
+    """
+
+    overall: ScoreResult
+    rows: list[dict[str, Any]]
+    sample_index: NDArray[np.int64]
+    params: dict[str, NDArray[Any]]
+    counts: SampleCounts
+
+    def table(self) -> str:
+        """The aligned text table of :attr:`rows`."""
+        return format_table(self.rows)
+
+    def summary_line(self) -> str:
+        """ODS / OIS / AP and the chance level in one line."""
+        o = self.overall
+        return (f"ODS F1 {o.ods_f1:.3f} at threshold {o.ods_threshold:.2f}   "
+                f"OIS F1 {o.ois_f1:.3f}   AP {o.ap:.3f}   "
+                f"chance AP (random scores) {o.chance_ap:.4f}")
+
+    def per_sample_rows(self) -> list[dict[str, Any]]:
+        """One JSON-safe dict per scored sample: its store index, parameters and scores."""
+        ps = self.overall.per_sample
+        names = sorted(self.params)
+        out = []
+        for j in range(self.counts.n_samples):
+            row: dict[str, Any] = {"sample": int(self.sample_index[j])}
+            row.update({k: self.params[k][j] for k in names})
+            row.update({k: ps[k][j] for k in ("precision", "recall", "f1", "iou", "tp", "fp",
+                                              "fn", "tp_truth", "n_pred", "n_truth")})
+            out.append(json_safe(row))
+        return out
+
+    def write(self, prefix: str, *, per_sample: bool = False,
+              meta: dict[str, Any] | None = None) -> list[str]:
+        """Write ``<prefix>.csv`` and ``<prefix>.json`` (and ``<prefix>.samples.csv`` with
+        ``per_sample``); returns the paths. ``meta`` goes into the JSON report."""
+        import csv
+        import json
+        import os
+
+        os.makedirs(os.path.dirname(os.path.abspath(prefix)), exist_ok=True)
+        with open(prefix + ".csv", "w", newline="") as fh:
+            w = csv.DictWriter(fh, fieldnames=list(CSV_COLUMNS))
+            w.writeheader()
+            for r in self.rows:
+                w.writerow({k: ("" if r[k] is None else r[k]) for k in CSV_COLUMNS})
+        report: dict[str, Any] = {**(meta or {}), "overall": self.overall.summary(),
+                                  "groups": self.rows}
+        written = [prefix + ".csv", prefix + ".json"]
+        if per_sample:
+            sample_rows = self.per_sample_rows()
+            with open(prefix + ".samples.csv", "w", newline="") as fh:
+                w = csv.DictWriter(fh, fieldnames=list(sample_rows[0]))
+                w.writeheader()
+                w.writerows(sample_rows)
+            report["per_sample"] = sample_rows
+            written.append(prefix + ".samples.csv")
+        with open(prefix + ".json", "w") as fh:
+            json.dump(json_safe(report), fh, indent=1)
+        return written
+
+
+def score_store(pred: Any, store: Any, *, indices: ArrayLike | None = None,
+                threshold: float = 0.5, tolerance_px: float = 0.0, by: tuple[str, ...] = (),
+                bins: int = 4, thresholds: int | ArrayLike = 99,
+                progress: bool = False) -> StoreScore:
+    """Score fault predictions against the ``fault`` labels of a demseis store.
+
+    Parameters
+    ----------
+    pred : array-like (N_pred, H, W) or str
+        Probabilities in [0, 1], or the path of a ``.npy`` file / Zarr array of them.
+    store : str, Path or object with a ``path`` attribute (e.g. :class:`demseis.Store`)
+    indices : array_like of int, shape (N_pred,), optional
+        Store sample of each prediction row (default: row i is sample i, all samples).
+    threshold, tolerance_px, thresholds : see :func:`score`.
+    by : names of per-sample parameters to group by (e.g. ``("freq_hz", "snr_db")``).
+    bins : bins of parameters with many distinct values.
+
+    Returns
+    -------
+    StoreScore
+    """
+    from demseis.datasets.read import open_truth
+
+    truth = open_truth(str(getattr(store, "path", store)))
+    for name in by:
+        if name not in truth.params:
+            raise InputError(f"--by {name!r}: the store has per-sample parameters "
+                             f"{sorted(truth.params)}")
+    if isinstance(pred, (str, bytes)) or hasattr(pred, "__fspath__"):
+        pred = load_predictions(str(pred))
+    elif not hasattr(pred, "shape"):
+        pred = np.asarray(pred)
+    counts, sample = score_store_counts(pred, truth, indices=indices, threshold=threshold,
+                                        tolerance_px=tolerance_px, thresholds=thresholds,
+                                        progress=progress)
+    params = {k: v[sample] for k, v in truth.params.items()}
+    return StoreScore(overall=summarise(counts), rows=group_rows(counts, params, list(by), bins=bins),
+                      sample_index=sample, params=params, counts=counts)

@@ -10,7 +10,7 @@ Layout of a config file (every key optional; defaults are the ``quick`` preset's
     renders_per_snapshot = 1 # extra draws per snapshot for distributions of render parameters
     dip_deg = { dist = "uniform", low = 30, high = 70 }
     freq_hz = [20, 40, 60]
-    ...                      # every scenario parameter: see ``demseis.generator.config.PARAMS``
+    ...                      # every scenario parameter: see ``demseis params``
 
     [model]                  # the DEM box and run control (fixed for a sweep)
     [grid]                   # the raster grid (fixed: all samples share one shape)
@@ -24,7 +24,6 @@ Every key is validated: an unknown key, a wrong type or an out-of-range value ra
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -32,190 +31,64 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from demseis.dem.types import Material
 from demseis.errors import ConfigError
 from demseis.generator.params import (
     DistSpec,
     Fixed,
     GridSpec,
-    ParamDef,
     Spec,
     parse_spec,
     spec_values_hint,
 )
+from demseis.parameters import PARAMS, PROPERTY_FIELDS, SCENARIO, Param
 
-PRESETS = ("tiny", "quick", "seed")
-
-_MAT = Material()
-
-INF = math.inf
-
-# Scenario parameters that live in [sweep]. Property-model fields are appended from
-# demseis.seismic.PropertyModel by _property_params().
-_BASE_PARAMS: tuple[ParamDef, ...] = (
-    # fault
-    ParamDef("dip_deg", float, "run", 45.0, 10.0, 89.0, doc="basement fault dip (degrees)"),
-    ParamDef("throw_m", float, "run", 450.0, 1.0, 1.0e5, doc="final vertical throw of the basement fault (m)"),
-    ParamDef("fault_x_frac", float, "run", 0.5, 0.05, 0.95,
-             doc="x where the basement fault meets the model base, as a fraction of the width"),
-    ParamDef("dip_direction", str, "run", "right", choices=("right", "left"),
-             doc="side of the hanging wall"),
-    # layering
-    ParamDef("n_layers", int, "run", 48, 1, 250, doc="number of pre-kinematic layers"),
-    ParamDef("layer_thickness_cv", float, "run", 0.0, 0.0, 0.9,
-             doc="coefficient of variation of layer thicknesses (0 = equal thicknesses)"),
-    # mechanics (demseis.dem.Material; defaults are Material's)
-    ParamDef("density_kg_m3", float, "run", _MAT.density_kg_m3, 500.0, 6000.0, doc="element density (kg/m^3)"),
-    ParamDef("kn_n_m", float, "run", _MAT.kn_n_m, 1.0e6, 1.0e13, doc="normal contact stiffness Kn (N/m)"),
-    ParamDef("ks_ratio", float, "run", _MAT.ks_ratio, 0.0, 2.0, doc="shear stiffness Ks / Kn"),
-    ParamDef("friction", float, "run", _MAT.friction, 0.0, 2.0, doc="inter-element friction coefficient mu"),
-    ParamDef("cohesion_n", float, "run", _MAT.cohesion_n, 0.0, 1.0e12, doc="contact cohesion C0 (N)"),
-    ParamDef("bond_strain", float, "run", _MAT.bond_strain, 1.0e-5, 1.0, doc="bond-breaking strain r0"),
-    ParamDef("contact_model", str, "run", _MAT.model, choices=("frictional", "bonded"),
-             doc="frictional-cohesive (bonds start broken) or bonded"),
-    ParamDef("damping_scale", float, "run", _MAT.damping_scale, 0.0, 1.0e13,
-             doc="viscous damping eta = dt * damping_scale (N s/m per s)"),
-    ParamDef("gravity_m_s2", float, "run", _MAT.gravity_m_s2, 0.0, 100.0, doc="gravity (m/s^2)"),
-    # rendering
-    ParamDef("freq_hz", float, "render", 40.0, 1.0, 500.0, doc="Ricker peak frequency (Hz)"),
-    ParamDef("snr_db", float, "render", INF, -40.0, INF,
-             doc="signal-to-noise ratio in dB, 20 log10(rms signal / rms noise); inf = no noise"),
-    ParamDef("noise_kind", str, "render", "white", choices=("white", "band"),
-             doc="white or band-limited noise"),
-)
-
-_MATERIAL_FIELDS = {
-    "density_kg_m3": "density_kg_m3",
-    "kn_n_m": "kn_n_m",
-    "ks_ratio": "ks_ratio",
-    "friction": "friction",
-    "cohesion_n": "cohesion_n",
-    "bond_strain": "bond_strain",
-    "contact_model": "model",
-    "damping_scale": "damping_scale",
-    "gravity_m_s2": "gravity_m_s2",
-}
+PRESETS = ("tiny", "quick", "seed", "variety")
 
 
-@functools.cache
-def _property_params() -> tuple[ParamDef, ...]:
-    """Sweepable (numeric scalar) fields of :class:`demseis.seismic.PropertyModel` (run level).
-
-    Its string and tuple fields (lithology names and Vp/density ranges, density law,
-    background rule) are set in ``[properties]``.
-    """
-    from demseis.seismic import PropertyModel
-
-    out = []
-    defaults = PropertyModel()
-    for f in dataclasses.fields(PropertyModel):
-        value = getattr(defaults, f.name)
-        if isinstance(value, bool):
-            kind: type = bool
-        elif isinstance(value, int):
-            kind = int
-        elif isinstance(value, float):
-            kind = float
-        else:
-            continue  # strings and tuples are set in [properties]
-        out.append(ParamDef(f.name, kind, "run", value, doc=f"PropertyModel.{f.name}"))
-    return tuple(out)
+def _section(name: str) -> dict[str, Param]:
+    """The declared keys of config table ``[name]`` (``sweep``: only the sweep-level ones)."""
+    return {k: p for k, p in PARAMS.items() if p.section == name and p.level == "sweep"}
 
 
-@functools.cache
-def all_params() -> dict[str, ParamDef]:
-    """Every scenario parameter accepted in ``[sweep]``, by name (shared: do not mutate)."""
-    params = {p.name: p for p in _BASE_PARAMS}
-    for p in _property_params():
-        if p.name in params:
-            raise RuntimeError(f"PropertyModel field {p.name!r} collides with a sweep parameter")
-        params[p.name] = p
-    return params
+def _default(name: str) -> Any:
+    return PARAMS[name].default
 
 
-@dataclass(frozen=True)
-class ModelSection:
-    """The DEM box and run control; fixed for a whole sweep.
-
-    Attributes
-    ----------
-    width_m, height_m : model box (m).
-    radius_min_m, radius_max_m : element radii (m), drawn uniformly.
-    n_snapshots : snapshots per run, equally spaced in throw, the first the undeformed reference.
-    sedimentation : fill hanging-wall accommodation with growth layers.
-    wall_speed_m_s : speed of the moving basement along dip (m/s of model time).
-    """
-
-    width_m: float = 2400.0
-    height_m: float = 1200.0
-    radius_min_m: float = 12.5
-    radius_max_m: float = 25.0
-    n_snapshots: int = 4
-    sedimentation: bool = True
-    wall_speed_m_s: float = 5.0
+def _section_class(table: str, cls_name: str, doc: str) -> type:
+    """A frozen dataclass with one field per declared key of ``[table]`` (type and default from
+    :mod:`demseis.parameters`; ``demseis params`` documents each field)."""
+    spec = [(k, p.kind, field(default=p.default)) for k, p in _section(table).items()]
+    cls = dataclasses.make_dataclass(cls_name, spec, frozen=True)
+    cls.__module__ = __name__  # pickles by reference (configs travel to the dask workers)
+    cls.__doc__ = doc
+    return cls
 
 
-_MODEL_DEFS = {
-    "width_m": ParamDef("width_m", float, "fixed", 2400.0, 100.0, 1.0e5),
-    "height_m": ParamDef("height_m", float, "fixed", 1200.0, 50.0, 1.0e5),
-    "radius_min_m": ParamDef("radius_min_m", float, "fixed", 12.5, 0.1, 1.0e3),
-    "radius_max_m": ParamDef("radius_max_m", float, "fixed", 25.0, 0.1, 1.0e3),
-    "n_snapshots": ParamDef("n_snapshots", int, "fixed", 4, 2, 1000),
-    "sedimentation": ParamDef("sedimentation", bool, "fixed", True),
-    "wall_speed_m_s": ParamDef("wall_speed_m_s", float, "fixed", 5.0, 1.0e-3, 100.0),
-}
-
-
-@dataclass(frozen=True)
-class GridSection:
-    """Raster grid; fixed for a sweep because every sample shares one (H, W) shape."""
-
-    cell_m: float = 10.0
-
-
-_GRID_DEFS = {"cell_m": ParamDef("cell_m", float, "fixed", 10.0, 0.5, 1000.0)}
-
-
-@dataclass(frozen=True)
-class OutputSection:
-    """Optional arrays and the output domain.
-
-    Attributes
-    ----------
-    impedance : also store the smoothed impedance grid (float32).
-    domain : ``"depth"`` (sections convolved in two-way time and mapped back to depth, so the
-        arrays are (H, W) cells of the grid) or ``"time"`` (sections and every label array on a
-        two-way-time axis of ``dt_s`` samples, long enough for the slowest possible column).
-    dt_s : time-domain sample interval (s).
-    """
-
-    impedance: bool = False
-    domain: str = "depth"
-    dt_s: float = 0.002
-
-
-_OUTPUT_DEFS = {
-    "impedance": ParamDef("impedance", bool, "fixed", False),
-    "domain": ParamDef("domain", str, "fixed", "depth", choices=("depth", "time")),
-    "dt_s": ParamDef("dt_s", float, "fixed", 0.002, 1.0e-4, 0.02),
-}
+ModelSection = _section_class("model", "ModelSection", """The DEM box and run control; fixed for a
+whole sweep: ``width_m``, ``height_m``, ``radius_min_m``, ``radius_max_m``, ``n_snapshots``,
+``sedimentation``, ``wall_speed_m_s``.""")
+GridSection = _section_class("grid", "GridSection", """The raster grid (``cell_m``); fixed for a
+sweep because every sample shares one (H, W) shape.""")
+OutputSection = _section_class("output", "OutputSection", """Optional arrays and the output domain:
+``impedance`` (also store the smoothed impedance grid), ``domain`` (``"depth"``: sections
+convolved in two-way time and mapped back to depth cells; ``"time"``: sections and every label
+on a two-way-time axis of ``dt_s`` samples, long enough for the slowest possible column).""")
+_MODEL_DEFS = _section("model")
+_GRID_DEFS = _section("grid")
+_OUTPUT_DEFS = _section("output")
 
 
 @dataclass(frozen=True)
 class SweepSection:
     """How many DEM runs, the root seed and the spec of every scenario parameter."""
 
-    seed: int = 0
-    n_runs: int = 4
-    renders_per_snapshot: int = 1
+    seed: int = _default("seed")
+    n_runs: int = _default("n_runs")
+    renders_per_snapshot: int = _default("renders_per_snapshot")
     params: dict[str, Spec] = field(default_factory=dict)
 
 
-_SWEEP_DEFS = {
-    "seed": ParamDef("seed", int, "fixed", 0, 0, 2**63 - 1),
-    "n_runs": ParamDef("n_runs", int, "fixed", 4, 1, 10**7),
-    "renders_per_snapshot": ParamDef("renders_per_snapshot", int, "fixed", 1, 1, 10**4),
-}
+_SWEEP_DEFS = _section("sweep")
 
 
 @dataclass(frozen=True)
@@ -238,7 +111,7 @@ class Config:
     def render_grid(self) -> list[dict[str, Any]]:
         """The render-level combinations of one snapshot (grids crossed, in key order)."""
         return _cross({k: s for k, s in self.sweep.params.items()
-                       if all_params()[k].level == "render"})
+                       if SCENARIO[k].level == "sample"})
 
     @property
     def renders_per_run_snapshot(self) -> int:
@@ -284,7 +157,7 @@ def _cross(specs: dict[str, Spec]) -> list[dict[str, Any]]:
 
 # ---- parsing -----------------------------------------------------------------------
 
-def _parse_table(raw: Any, defs: dict[str, ParamDef], where: str) -> dict[str, Any]:
+def _parse_table(raw: Any, defs: dict[str, Param], where: str) -> dict[str, Any]:
     if not isinstance(raw, dict):
         raise ConfigError(f"[{where}] must be a table, got {type(raw).__name__}")
     out = {}
@@ -365,7 +238,7 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
     if not isinstance(name, str) or not name:
         raise ConfigError(f"name = {name!r}: expected a non-empty string")
 
-    pdefs = all_params()
+    pdefs = SCENARIO
     sweep_raw = raw.get("sweep", {})
     if not isinstance(sweep_raw, dict):
         raise ConfigError(f"[sweep] must be a table, got {type(sweep_raw).__name__}")
@@ -400,7 +273,7 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
     prop_raw = raw.get("properties", {})
     if not isinstance(prop_raw, dict):
         raise ConfigError(f"[properties] must be a table, got {type(prop_raw).__name__}")
-    scalar_props = {p.name for p in _property_params()}
+    scalar_props = set(PROPERTY_FIELDS)
     prop_defaults = PropertyModel()
     prop_fields = {f.name for f in dataclasses.fields(PropertyModel)} - scalar_props
     properties: dict[str, Any] = {}
@@ -443,8 +316,7 @@ def _cross_checks(cfg: Config) -> None:
     if cfg.grid.cell_m * 4 > min(cfg.model.width_m, cfg.model.height_m):
         raise ConfigError(f"grid.cell_m = {cfg.grid.cell_m:g} is too coarse for the model box")
     # every extreme value of every property parameter must make a valid PropertyModel
-    scalar = {p.name for p in _property_params()}
-    for key in scalar:
+    for key in PROPERTY_FIELDS:
         spec = cfg.sweep.params[key]
         candidates = _spec_candidates(spec)
         for value in candidates:

@@ -24,83 +24,9 @@ from typing import Any
 import numpy as np
 
 from demseis.errors import ConfigError
+from demseis.parameters import Param
 
 DISTRIBUTIONS = ("uniform", "loguniform", "choice", "truncnormal")
-
-
-@dataclass(frozen=True)
-class ParamDef:
-    """What a parameter may be.
-
-    Attributes
-    ----------
-    name : the key in ``[sweep]``.
-    kind : ``float``, ``int``, ``str`` or ``bool``.
-    level : ``"run"`` (one value per DEM run) or ``"render"`` (per rendered section).
-    default : value used when the key is absent.
-    lo, hi : inclusive numeric bounds (None = unbounded); ``hi = math.inf`` admits inf.
-    choices : allowed values of a ``str`` parameter.
-    doc : one line for ``--help`` and the docs, with the unit.
-    """
-
-    name: str
-    kind: type
-    level: str
-    default: Any
-    lo: float | None = None
-    hi: float | None = None
-    choices: tuple[str, ...] | None = None
-    doc: str = ""
-
-    def allowed(self) -> str:
-        """Human description of the admissible values."""
-        if self.choices is not None:
-            return "one of " + ", ".join(repr(c) for c in self.choices)
-        if self.kind is bool:
-            return "true or false"
-        kind = "an integer" if self.kind is int else "a number"
-        if self.lo is not None and self.hi is not None:
-            return f"{kind} in [{_fmt(self.lo)}, {_fmt(self.hi)}]"
-        if self.lo is not None:
-            return f"{kind} >= {_fmt(self.lo)}"
-        if self.hi is not None:
-            return f"{kind} <= {_fmt(self.hi)}"
-        return kind
-
-    def check_value(self, value: Any, where: str) -> Any:
-        """Coerce and range-check one value; raise ConfigError naming ``where``."""
-        bad = ConfigError(f"{where} = {value!r} is not allowed: expected {self.allowed()}")
-        if self.kind is bool:
-            if not isinstance(value, bool):
-                raise bad
-            return value
-        if self.kind is str:
-            if not isinstance(value, str) or (self.choices and value not in self.choices):
-                raise bad
-            return value
-        if isinstance(value, str) and self.kind is float and value.strip().lower() in ("inf", "+inf"):
-            value = math.inf
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise bad
-        if self.kind is int:
-            if isinstance(value, float) and not value.is_integer():
-                raise bad
-            value = int(value)
-        else:
-            value = float(value)
-            if math.isnan(value):
-                raise bad
-        if (self.lo is not None and value < self.lo) or (self.hi is not None and value > self.hi):
-            raise bad
-        if self.kind is float and math.isinf(value) and self.hi != math.inf:
-            raise bad
-        return value
-
-
-def _fmt(x: float) -> str:
-    if x == math.inf:
-        return "inf"
-    return f"{x:g}"
 
 
 @dataclass(frozen=True)
@@ -175,7 +101,7 @@ def _json_value(v: Any) -> Any:
     return v
 
 
-def parse_spec(pdef: ParamDef, raw: Any, where: str) -> Spec:
+def parse_spec(pdef: Param, raw: Any, where: str) -> Spec:
     """Parse the TOML value of one sweep parameter into a spec.
 
     Raises
@@ -191,7 +117,7 @@ def parse_spec(pdef: ParamDef, raw: Any, where: str) -> Spec:
     return Fixed(pdef.check_value(raw, where))
 
 
-def _parse_dist(pdef: ParamDef, raw: dict, where: str) -> DistSpec:
+def _parse_dist(pdef: Param, raw: dict, where: str) -> DistSpec:
     dist = raw.get("dist")
     if dist not in DISTRIBUTIONS:
         raise ConfigError(
@@ -247,7 +173,7 @@ def _parse_dist(pdef: ParamDef, raw: dict, where: str) -> DistSpec:
                     std=None if "std" not in vals else float(vals["std"]), kind=pdef.kind)
 
 
-def spec_from_json(pdef: ParamDef, raw: Any, where: str) -> Spec:
+def spec_from_json(pdef: Param, raw: Any, where: str) -> Spec:
     """Inverse of ``Spec.to_json`` (used when a config is read back from a store)."""
     return parse_spec(pdef, raw, where)
 

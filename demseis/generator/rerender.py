@@ -1,5 +1,4 @@
-"""``demseis render`` and ``demseis relabel``: new sections or new labels from a store's particle
-snapshots, without the DEM."""
+"""``demseis render`` and ``demseis relabel``: new sections from a store's particle snapshots, without the DEM."""
 
 from __future__ import annotations
 
@@ -17,29 +16,54 @@ from demseis.generator.sweep import SweepSummary, _progress_bar, prepare_store
 
 
 def rerender_config(source_cfg: dict[str, Any], freqs_hz: list[float], snrs_db: list[float],
-                    noise_kind: str) -> Config:
-    """The source config with its render parameters replaced (run parameters unchanged)."""
+                    noise_kind: str, imaging: list[str] | None = None,
+                    psf_max_angles_deg: list[float] | None = None,
+                    psf_aperture_m: float | None = None) -> Config:
+    """The source config with its render parameters replaced (run parameters unchanged).
+
+    ``imaging``, ``psf_max_angles_deg`` and ``psf_aperture_m`` replace the source's values
+    when given (lists become grids: every snapshot is rendered at each); None keeps them.
+    """
     raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in source_cfg.items()}
     raw["sweep"] = dict(raw["sweep"])
     raw["sweep"]["freq_hz"] = [f for f in freqs_hz]
     raw["sweep"]["snr_db"] = ["inf" if math.isinf(s) else s for s in snrs_db]
     raw["sweep"]["noise_kind"] = noise_kind
+    if imaging is not None:
+        raw["sweep"]["imaging"] = list(imaging)
+    if psf_max_angles_deg is not None:
+        raw["sweep"]["psf_max_angle_deg"] = list(psf_max_angles_deg)
+    if psf_aperture_m is not None:
+        raw["sweep"]["psf_aperture_m"] = psf_aperture_m
     raw["sweep"]["renders_per_snapshot"] = 1
     raw["name"] = f"{source_cfg.get('name', 'demseis')}-render"
     return parse_config(raw, source="re-render config")
 
 
-def rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snrs_db: list[float],
-             noise_kind: str = "white", overwrite: bool = False, progress: bool = True) -> SweepSummary:
+def rerender(source: str | Path, out: str | Path, **options: Any) -> SweepSummary:
+    """Write a new store with every done run of ``source`` re-rendered, holding ``out``'s
+    writer lock (options: those of :func:`_rerender`)."""
+    from demseis.datasets import writer_lock
+
+    with writer_lock(out, "demseis render"):
+        return _rerender(source, out, **options)
+
+
+def _rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snrs_db: list[float],
+              noise_kind: str = "white", imaging: list[str] | None = None,
+              psf_max_angles_deg: list[float] | None = None, psf_aperture_m: float | None = None,
+              overwrite: bool = False, progress: bool = True) -> SweepSummary:
     """Write a new store with every done run of ``source`` re-rendered.
 
-    Runs that are not done in the source are recorded as failed in the new store.
+    Runs that are not done in the source are recorded as failed in the new store. The
+    imaging options (see :func:`rerender_config`) default to the source's.
     """
     from demseis.datasets import open_store
 
     src = Path(source)
     root = open_store(src)
-    cfg = rerender_config(dict(root.attrs)["config"], freqs_hz, snrs_db, noise_kind)
+    cfg = rerender_config(dict(root.attrs)["config"], freqs_hz, snrs_db, noise_kind, imaging,
+                          psf_max_angles_deg, psf_aperture_m)
     return _redo(src, out, cfg, overwrite=overwrite, progress=progress)
 
 
@@ -53,7 +77,8 @@ def relabel_config(source_cfg: dict[str, Any], labels: dict[str, Any]) -> Config
 
 def relabel(source: str | Path, out: str | Path, *, labels: dict[str, Any],
             overwrite: bool = False, progress: bool = True) -> SweepSummary:
-    """Write a new store with the seismic of ``source`` and labels made with ``labels``.
+    """Write a new store with the seismic of ``source`` and labels made with ``labels``,
+    holding ``out``'s writer lock.
 
     Parameters
     ----------
@@ -63,12 +88,13 @@ def relabel(source: str | Path, out: str | Path, *, labels: dict[str, Any],
         take their defaults, not the source's values.
     overwrite, progress : as for :func:`rerender`.
     """
-    from demseis.datasets import open_store
+    from demseis.datasets import open_store, writer_lock
 
-    src = Path(source)
-    root = open_store(src)
-    cfg = relabel_config(dict(root.attrs)["config"], labels)
-    return _redo(src, out, cfg, overwrite=overwrite, progress=progress)
+    with writer_lock(out, "demseis relabel"):
+        src = Path(source)
+        root = open_store(src)
+        cfg = relabel_config(dict(root.attrs)["config"], labels)
+        return _redo(src, out, cfg, overwrite=overwrite, progress=progress)
 
 
 def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
@@ -101,7 +127,7 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
             spec = plan_run(cfg, run)
             snaps = read_particles(src, run)
             p = spec.params
-            info = run_info(cfg, p)
+            info = run_info(cfg, p, run)
             data = render_run(cfg, spec, snaps, info)
             write_shard(out, run, data.arrays, data.params, data.snapshots)
             summary.completed.append(run)

@@ -1,12 +1,14 @@
 """From a :class:`Config` to concrete runs and renders, with one SeedSequence tree.
 
-Seed tree (spawn keys under the sweep seed)::
+Seed tree (spawn keys under the sweep seed; the second key is one of the named constants)::
 
-    (run,)                 the run's root
-    (run, 0)               run-level parameter draws
-    (run, 1)               the DEM (packing, settling, sedimentation)
-    (run, 2)               rock properties (per-layer draws; per-element scatter seed)
-    (run, 3, sample)       one sample's render draws and noise
+    (run,)                           the run's root
+    (run, SEED_RUN_PARAMS)           run-level parameter draws
+    (run, SEED_DEM)                  the DEM (packing, settling, sedimentation)
+    (run, SEED_PROPERTIES)           rock properties (per-layer draws; per-element scatter seed)
+    (run, SEED_RENDER, sample)       one sample's render draws and its noise seed
+    (run, SEED_LAYERS)               layer thicknesses (``layer_thickness_cv > 0``)
+    (run, SEED_FAULTS)               placement of a fault system (``structure != "single"``)
 
 A run's values depend only on the sweep seed and the run index, never on worker count or order.
 """
@@ -18,8 +20,17 @@ from typing import Any
 
 import numpy as np
 
-from demseis.generator.config import Config, _cross, all_params
+from demseis.generator.config import Config, _cross
 from demseis.generator.params import DistSpec, Fixed, GridSpec
+from demseis.parameters import SCENARIO
+
+#: second spawn key of a run's seed tree (values fixed: changing one changes every dataset)
+SEED_RUN_PARAMS = 0
+SEED_DEM = 1
+SEED_PROPERTIES = 2
+SEED_RENDER = 3
+SEED_LAYERS = 4
+SEED_FAULTS = 6
 
 
 def seed_sequence(cfg: Config, *key: int) -> np.random.SeedSequence:
@@ -42,6 +53,9 @@ class Render:
     snr_db: float
     noise_kind: str
     seed: int  # 64-bit seed of the noise Generator
+    imaging: str = "1d"  # "1d" or "psf" (demseis.seismic.psf)
+    psf_max_angle_deg: float = 30.0
+    psf_aperture_m: float = 0.0  # 0 = no aperture limit
 
 
 @dataclass(frozen=True)
@@ -57,13 +71,13 @@ def run_params(cfg: Config, run: int) -> dict[str, Any]:
     """Run-level parameter values of run ``run``.
 
     Run-level grids are crossed (in key order) and cycled over the runs: run ``i`` takes
-    combination ``i mod G``. Distributions are drawn from node ``(run, 0)`` in key order.
+    combination ``i mod G``. Distributions are drawn from node ``(run, SEED_RUN_PARAMS)`` in
+    key order.
     """
-    pdefs = all_params()
-    run_specs = {k: s for k, s in cfg.sweep.params.items() if pdefs[k].level == "run"}
+    run_specs = {k: s for k, s in cfg.sweep.params.items() if SCENARIO[k].level == "run"}
     combos = _cross(run_specs)
     combo = combos[run % len(combos)]
-    rng = rng_at(cfg, run, 0)
+    rng = rng_at(cfg, run, SEED_RUN_PARAMS)
     out: dict[str, Any] = {}
     for key, spec in combo.items():
         if isinstance(spec, Fixed):
@@ -83,10 +97,13 @@ def plan_run(cfg: Config, run: int) -> RunSpec:
     for snap in range(cfg.model.n_snapshots):
         for combo in combos:
             for _ in range(cfg.sweep.renders_per_snapshot):
-                ss = seed_sequence(cfg, run, 3, sample)
+                ss = seed_sequence(cfg, run, SEED_RENDER, sample)
                 rng = np.random.default_rng(ss)
                 vals = {}
-                for key in ("freq_hz", "snr_db", "noise_kind"):
+                # drawn in this order; keys added later come last so that older configs
+                # draw the same values
+                for key in ("freq_hz", "snr_db", "noise_kind", "imaging", "psf_max_angle_deg",
+                            "psf_aperture_m"):
                     spec = combo[key]
                     if isinstance(spec, Fixed):
                         vals[key] = spec.value
@@ -99,6 +116,8 @@ def plan_run(cfg: Config, run: int) -> RunSpec:
                 noise_seed = int(ss.generate_state(2, dtype=np.uint64)[1])
                 renders.append(Render(sample=sample, snapshot=snap, freq_hz=float(vals["freq_hz"]),
                                       snr_db=float(vals["snr_db"]), noise_kind=str(vals["noise_kind"]),
-                                      seed=noise_seed))
+                                      seed=noise_seed, imaging=str(vals["imaging"]),
+                                      psf_max_angle_deg=float(vals["psf_max_angle_deg"]),
+                                      psf_aperture_m=float(vals["psf_aperture_m"])))
                 sample += 1
     return RunSpec(run=run, params=run_params(cfg, run), renders=tuple(renders))

@@ -117,18 +117,31 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
                 f"store {str(out)!r} was written with a different config (first difference: "
                 f"{diff}); use --overwrite to replace it, or choose another --out"
             )
-        return shard_status(out)
+        return shard_status(out, verify=True)  # a damaged done shard is redone
     create_store(
         out,
         n_shards=cfg.sweep.n_runs,
         samples_per_shard=cfg.samples_per_run,
         shape=sample_shape(cfg),
         arrays=array_dtypes(cfg),
-        params=param_dtypes(),
+        params=store_param_specs(),
         attrs=attrs,
         overwrite=overwrite,
     )
     return shard_status(out)
+
+
+def store_param_specs() -> dict[str, Any]:
+    """Per-sample parameters of the store with their declared unit and doc (demseis.parameters)
+    and, for the categorical ones, the names of their codes."""
+    from demseis.datasets import ParamSpec
+    from demseis.parameters import SCENARIO, STORED
+
+    decl = {k: (p.unit, p.doc) for k, p in SCENARIO.items()}
+    decl.update({p.name: (p.unit, p.doc) for p in STORED})  # throw_m: the throw reached
+    return {k: ParamSpec(v, long_name=decl[k][1], units=decl[k][0] or "1",
+                         categories=PARAM_CODES.get(k))
+            for k, v in param_dtypes().items()}
 
 
 def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, Any]:
@@ -171,14 +184,16 @@ def warm_numba_cache() -> None:
 def run_cost(cfg: Config, run: int) -> float:
     """Relative cost of DEM run ``run``: integrator steps to the target throw plus settling.
 
-    Steps = path along dip / wall speed / dt, with dt = 0.25 sqrt(m_min / Kn) (Eq. 5); the
-    element count is the same for every run of a sweep. Used to start the longest runs first.
+    Steps = path along dip / wall speed / dt, with the DEM's own time step
+    (:func:`demseis.dem.time_step`); the element count is the same for every run of a sweep.
+    Used to start the longest runs first.
     """
+    from demseis.dem import time_step
     from demseis.generator.sampling import run_params
 
     p = run_params(cfg, run)
     m = cfg.model
-    dt = 0.25 * math.sqrt(p["density_kg_m3"] * math.pi * m.radius_min_m**2 / p["kn_n_m"])
+    dt = time_step(m.radius_min_m, p["density_kg_m3"], p["kn_n_m"])
     path_m = p["throw_m"] / math.sin(math.radians(p["dip_deg"]))
     return (path_m / m.wall_speed_m_s + 4.0) / dt
 
@@ -201,7 +216,9 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
     dip_lo = spec_values_hint(cfg.sweep.params["dip_deg"])[0]
     kn_lo = spec_values_hint(cfg.sweep.params["kn_n_m"])[0]
     rho_hi = spec_values_hint(cfg.sweep.params["density_kg_m3"])[1]
-    dt = 0.25 * math.sqrt(rho_hi * math.pi * a**2 / kn_lo)
+    from demseis.dem import time_step
+
+    dt = time_step(a, rho_hi, kn_lo)
     path_m = throw_hi / math.sin(math.radians(dip_lo))
     steps = path_m / m.wall_speed_m_s / dt
     secs = n_elem * (steps / DRY_RUN_ELEMENT_STEPS_PER_S + DRY_RUN_SETTLE_S_PER_ELEMENT)
@@ -219,7 +236,20 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
     ]
 
 
-def run_sweep(
+def run_sweep(cfg: Config, out: str | Path, **options: Any) -> SweepSummary:
+    """Run (or resume) the sweep of ``cfg`` into the store ``out``, holding its writer lock.
+
+    A second writer of ``out`` is refused with StoreError naming the holder; only this driver
+    holds the lock, the dask workers write their shards (see demseis.datasets.lock). The
+    options are those of :func:`_run_sweep`.
+    """
+    from demseis.datasets import writer_lock
+
+    with writer_lock(out, "demseis generate"):
+        return _run_sweep(cfg, out, **options)
+
+
+def _run_sweep(
     cfg: Config,
     out: str | Path,
     *,
@@ -229,7 +259,7 @@ def run_sweep(
     progress: bool = True,
     retries: int = 2,
 ) -> SweepSummary:
-    """Run (or resume) the sweep of ``cfg`` into the store ``out``.
+    """Run (or resume) the sweep of ``cfg`` into the store ``out`` (the caller holds its lock).
 
     Parameters
     ----------

@@ -6,6 +6,8 @@ The per-snapshot render the generator does::
     vp_e, rho_e = element_properties(snap.ids, snap.layer, layer_props, model, seed)
     vp_g, rho_g = property_grids(snap.xy, snap.radius, vp_e, rho_e, snap.layer, grid, model)
     sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs_hz)        # (nf, nz, nx)
+    # or, imaged through a dip-limited 2-D point-spread function:
+    sections = psf_sections(vp_g, rho_g, grid.cell_m, freqs_hz, max_angle_deg=30.0)
     noisy = add_noise(sections[k], snr_db, "band", rng)
 
 See ``docs/seismic.md`` for the physics, conventions and measured accuracy and speed.
@@ -29,6 +31,7 @@ from demseis.seismic.properties import (
     property_grids,
     smooth,
 )
+from demseis.seismic.psf import IMAGING, imaged_sections, psf_sections
 from demseis.seismic.raster import rasterise
 from demseis.seismic.wavelet import ricker
 
@@ -36,5 +39,5 @@ __all__ = [
     "rasterise", "ricker", "reflectivity", "impedance", "convolve", "PropertyModel",
     "LayerProperties", "draw_layer_properties", "element_properties", "property_grids", "smooth",
     "synthetic_sections", "interface_times", "time_axis", "depth_to_time", "add_noise", "rms",
-    "snr_db",
+    "snr_db", "psf_sections", "imaged_sections", "IMAGING",
 ]

@@ -27,6 +27,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from demseis.errors import ConfigError, InputError
+from demseis.parameters import PARAMS, PROPERTY_FIELDS
 from demseis.seismic import _kernels
 from demseis.types import Grid
 from demseis.seismic.raster import rasterise
@@ -62,15 +63,15 @@ class PropertyModel:
     vp_min_m_s: tuple[float, ...] = (2200.0, 2600.0, 3800.0)
     vp_max_m_s: tuple[float, ...] = (3200.0, 4000.0, 5500.0)
     density: str = "gardner"
-    gardner_a: float = 310.0
-    gardner_b: float = 0.25
+    gardner_a: float = PARAMS["gardner_a"].default
+    gardner_b: float = PARAMS["gardner_b"].default
     rho_min_kg_m3: tuple[float, ...] = (2250.0, 2100.0, 2450.0)
     rho_max_kg_m3: tuple[float, ...] = (2550.0, 2450.0, 2700.0)
-    vp_scatter: float = 0.03
-    rho_scatter: float = 0.01
+    vp_scatter: float = PARAMS["vp_scatter"].default
+    rho_scatter: float = PARAMS["rho_scatter"].default
     background: str = "layer"
-    gaussian_sigma_cells: float = 0.7
-    median_size_cells: int = 3
+    gaussian_sigma_cells: float = PARAMS["gaussian_sigma_cells"].default
+    median_size_cells: int = PARAMS["median_size_cells"].default
 
     def __post_init__(self) -> None:
         # TOML arrays arrive as lists: store tuples so the model stays hashable and frozen.
@@ -127,28 +128,20 @@ class PropertyModel:
                                       f"[{k}] = {hi}: allowed is {a} <= {b}")
         _choice("density", self.density, ("gardner", "range"))
         _choice("background", self.background, ("layer", "global"))
-        _number("gardner_a", self.gardner_a, 100.0, 1000.0)
-        _number("gardner_b", self.gardner_b, 0.1, 0.5)
-        _number("vp_scatter", self.vp_scatter, 0.0, 0.2)
-        _number("rho_scatter", self.rho_scatter, 0.0, 0.2)
-        _number("gaussian_sigma_cells", self.gaussian_sigma_cells, 0.0, 5.0)
-        m = self.median_size_cells
-        if isinstance(m, bool) or not isinstance(m, (int, np.integer)) or not (1 <= m <= 9) \
-                or m % 2 == 0:
-            raise ConfigError(f"properties.median_size_cells = {m!r}: allowed is an odd integer "
-                              "in [1, 9] (1 = no median filter)")
+        for name in PROPERTY_FIELDS:  # ranges declared in demseis.parameters
+            if isinstance(getattr(self, name), float) and PARAMS[name].kind is int:
+                raise ConfigError(f"properties.{name} = {getattr(self, name)!r}: allowed is "
+                                  f"{PARAMS[name].allowed()}")
+            PARAMS[name].check_value(getattr(self, name), f"properties.{name}", ConfigError)
+        if self.median_size_cells % 2 == 0:
+            raise ConfigError(f"properties.median_size_cells = {self.median_size_cells!r}: "
+                              "allowed is an odd integer in [1, 9] (1 = no median filter)")
         return self
 
 
 def _choice(name: str, value, allowed: tuple[str, ...]) -> None:
     if value not in allowed:
         raise ConfigError(f"properties.{name} = {value!r}: allowed is one of {allowed}")
-
-
-def _number(name: str, value, lo: float, hi: float) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) \
-            or not np.isfinite(value) or not lo <= value <= hi:
-        raise ConfigError(f"properties.{name} = {value!r}: allowed is a number in [{lo}, {hi}]")
 
 
 @dataclass(frozen=True)

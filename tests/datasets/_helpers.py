@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 
 import numpy as np
@@ -67,3 +68,21 @@ def make_store(path: Path, n_shards: int = 4, s: int = 6, shape=(24, 32), write=
         d, p, parts = shard_data(k, s, shape, arrays, params, seed=seed)
         write_shard(path, k, d, p, parts)
     return path
+
+
+def digest(path: Path) -> dict[str, str]:
+    """sha256 of every file of a store, by relative path (byte-identity of two stores)."""
+    return {str(f.relative_to(path)): hashlib.sha256(f.read_bytes()).hexdigest()
+            for f in sorted(path.rglob("*")) if f.is_file()}
+
+
+def mini_config(domain: str = "depth"):
+    """A sweep of one minute DEM run (a few seconds once Numba's cache is warm)."""
+    from demseis.generator.config import load_config, parse_config
+
+    raw = load_config(preset="tiny").to_dict()
+    raw["sweep"].update(n_runs=1, n_layers=2, throw_m=20.0, dip_deg=60.0, snr_db=[10.0],
+                        noise_kind="band")
+    raw["model"].update(n_snapshots=2, width_m=300.0, height_m=200.0)
+    raw["output"] = {**raw.get("output", {}), "domain": domain, "impedance": True}
+    return parse_config(raw)

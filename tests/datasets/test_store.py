@@ -163,13 +163,21 @@ def test_open_store_errors(tmp_path, setup, message):
         open_store(path)
 
 
-def test_open_store_other_schema_version(tmp_path):
+@pytest.mark.parametrize("version, message", [
+    (99, r"schema version 99 but this demseis .* reads schema version 2$"),
+    (1, r"schema version 1 but this demseis .* reads schema version 2; it was written by an "
+        r"older demseis: regenerate it"),
+])
+def test_open_store_other_schema_version(tmp_path, version, message):
+    from demseis.datasets import to_xarray
+
     path = make_store(tmp_path / "s.zarr", n_shards=1, s=1, shape=(2, 3))
     meta = json.loads((path / "zarr.json").read_text())
-    meta["attributes"]["demseis"]["schema_version"] = 99
+    meta["attributes"]["demseis"]["schema_version"] = version
     (path / "zarr.json").write_text(json.dumps(meta))
-    with pytest.raises(StoreError, match=r"schema version 99 but this demseis .* reads schema version 1"):
-        open_store(path)
+    for read in (open_store, to_xarray):
+        with pytest.raises(StoreError, match=message):
+            read(path)
 
 
 def test_write_shard_rejects_bad_input(tmp_path):

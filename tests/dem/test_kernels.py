@@ -69,12 +69,14 @@ def test_neighbour_rebuild_carries_history_and_reports_overflow():
     assert st == 1
 
 
-def _pair_forces_ref(pos, vel, r, pairs, shear, bond, kn, ks, mu, c0, r0, dt):
+def _pair_forces_ref(pos, vel, r, pairs, shear, bond, cmat, ks_ratio, c0_heal, dt):
     """Slow reference of the force law documented in demseis.dem._kernels."""
     f = np.zeros_like(pos)
     shear = dict(shear)
     bond = dict(bond)
     for (i, j) in pairs:
+        kn, mu, c0, r0 = np.minimum(cmat[i], cmat[j])
+        ks = ks_ratio * kn
         d_vec = pos[j] - pos[i]
         d = np.linalg.norm(d_vec)
         R = r[i] + r[j]
@@ -82,12 +84,17 @@ def _pair_forces_ref(pos, vel, r, pairs, shear, bond, kn, ks, mu, c0, r0, dt):
             bond[(i, j)] = 0
         if not bond[(i, j)] and d >= R:
             shear[(i, j)] = 0.0
+            bond[(i, j)] = 0
             continue
         n = d_vec / d
         t = np.array([-n[1], n[0]])
         fn = kn * (R - d)
         xs = shear[(i, j)] + np.dot(vel[j] - vel[i], t) * dt
-        cap = c0 + mu * max(fn, 0.0)
+        cohesion = c0 if bond[(i, j)] else c0_heal * c0
+        if bond[(i, j)] == 2 and abs(ks * xs) > cohesion + mu * max(fn, 0.0):
+            bond[(i, j)] = 0  # a brittle bond that slips breaks
+            cohesion = c0_heal * c0
+        cap = cohesion + mu * max(fn, 0.0)
         fs = float(np.clip(-ks * xs, -cap, cap))
         if abs(-ks * xs) > cap:
             xs = -fs / ks
@@ -98,8 +105,10 @@ def _pair_forces_ref(pos, vel, r, pairs, shear, bond, kn, ks, mu, c0, r0, dt):
     return f, shear, bond
 
 
-@pytest.mark.parametrize("c0", [0.0, 2e7])
-def test_pair_forces_match_reference(c0):
+@pytest.mark.parametrize("c0,flag,heal,layered", [(0.0, 1, 1.0, False), (2e7, 1, 1.0, False),
+                                                  (2e7, 2, 0.0, False), (2e7, 1, 1.0, True),
+                                                  (2e7, 2, 0.3, True)])
+def test_pair_forces_match_reference(c0, flag, heal, layered):
     pos, vel, r, rng = _random_assembly()
     nbr, nn, sh, bo = _build(pos, r, 4.0)
     n = len(r)
@@ -107,21 +116,27 @@ def test_pair_forces_match_reference(c0):
     for i in range(n):
         for k in range(nn[i]):
             sh[i, k] = rng.normal(0, 0.05)
-            bo[i, k] = rng.random() < 0.5
+            bo[i, k] = flag if rng.random() < 0.5 else 0
     shear0 = {(i, int(nbr[i, k])): sh[i, k] for i in range(n) for k in range(nn[i])}
     bond0 = {(i, int(nbr[i, k])): int(bo[i, k]) for i in range(n) for k in range(nn[i])}
-    kn, ks, mu, r0, dt = 1e10, 5e9, 0.4, 0.02, 0.003
+    cmat = np.tile([1e10, 0.4, c0, 0.02], (n, 1))
+    if layered:  # two materials, strong and weak, in random elements
+        weak = rng.random(n) < 0.5
+        cmat[weak] = [3e9, 0.2, 0.2 * c0, 0.005]
+    ks_ratio, dt = 0.5, 0.003
     f = np.zeros((n, 2))
-    K.pair_forces(pos, vel, r, nbr, nn, sh, bo, kn, ks, mu, c0, r0, dt, f)
-    f_ref, sh_ref, bo_ref = _pair_forces_ref(pos, vel, r, pairs, shear0, bond0, kn, ks, mu, c0,
-                                             r0, dt)
+    # uniform mechanics go in as one row, layered ones as one row per element
+    K.pair_forces(pos, vel, r, nbr, nn, sh, bo, cmat if layered else cmat[:1], ks_ratio, heal,
+                  dt, f)
+    f_ref, sh_ref, bo_ref = _pair_forces_ref(pos, vel, r, pairs, shear0, bond0, cmat, ks_ratio,
+                                             heal, dt)
     np.testing.assert_allclose(f, f_ref, rtol=1e-9, atol=1e-9 * np.abs(f_ref).max())
     for i in range(n):
         for k in range(nn[i]):
             key = (i, int(nbr[i, k]))
             assert sh[i, k] == pytest.approx(sh_ref[key], rel=1e-10, abs=1e-15)
             assert bo[i, k] == bo_ref[key]
-    # the sample must exercise contacts, slip, bonds in tension and breaks
+    # the sample must exercise contacts, slip, bonds in tension and breaks (or lost cohesion)
     assert np.abs(f).max() > 1e8
     assert sum(bond0.values()) > sum(bo_ref.values()) > 0
 

@@ -47,7 +47,7 @@ def test_train_unet_example_runs_and_scores(tmp_path, capsys):
                    "--batch", "4", "--threads", "1", "--by", "freq_hz,snr_db"])
     assert rc == 0
     text = capsys.readouterr().out
-    assert text.count("$ demseis score") == 2 and "freq_hz" in text
+    assert text.count("scores of") == 2 and "freq_hz" in text
     idx = np.load(out / "test_indices.npy")
     pred = np.load(out / "unet_test.npy")
     assert pred.shape == (idx.size, 32, 32) and 0 <= pred.min() and pred.max() <= 1

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import zarr
 
+from demseis.datasets import SCHEMA_VERSION
 from demseis.errors import InputError, StoreError
 from demseis.cli import main
 from demseis.datasets.read import open_truth
@@ -21,7 +22,7 @@ def make_store(path, n_shards=3, per_shard=4, h=24, w=20, seed=0, done=None, wit
     rng = np.random.default_rng(seed)
     n = n_shards * per_shard
     root = zarr.open_group(str(path), mode="w")
-    root.attrs["demseis"] = {"schema_version": 1}
+    root.attrs["demseis"] = {"schema_version": SCHEMA_VERSION}
     root.attrs["grid"] = {"x0_m": 0.0, "top_m": 0.0, "cell_m": 10.0, "nz": h, "nx": w}
     root.attrs["config"] = {}
     fault = np.zeros((n, h, w), np.uint8)

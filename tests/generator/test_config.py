@@ -71,13 +71,13 @@ def test_invalid_toml_and_missing_file(tmp_path, capsys):
 
 def test_cli_process_exit_code_and_no_traceback(tmp_path):
     cfg = tmp_path / "bad.toml"
-    cfg.write_text("[sweep]\ndip_deg = 95\n")
+    cfg.write_text("[sweep]\ndip_deg = 85\n")  # the DEM refuses > 80: refused at load
     proc = subprocess.run([sys.executable, "-m", "demseis", "generate", str(cfg), "--out",
                            str(tmp_path / "x.zarr")], capture_output=True, text=True)
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
     assert proc.stderr.strip().splitlines() == [
-        "demseis: error: sweep.dip_deg = 95 is not allowed: expected a number in [10, 89]"
+        "demseis: error: sweep.dip_deg = 85 is not allowed: expected a number in [10, 80]"
     ]
 
 

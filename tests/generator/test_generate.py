@@ -26,13 +26,6 @@ def assert_same_bytes(a: Path, b: Path) -> None:
     assert not different, f"files differ: {different[:5]}"
 
 
-@pytest.fixture(scope="module")
-def tiny_store(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("gen") / "t.zarr"
-    assert main(["generate", "--preset", "tiny", "--out", str(out), "--workers", "0", "--quiet"]) == 0
-    return out
-
-
 def test_tiny_store_contents(tiny_store):
     root = zarr.open_group(str(tiny_store), mode="r")
     seis, fault = root["seismic"], root["fault"]

@@ -40,7 +40,7 @@ def bruges():
     return _import_bruges()
 
 
-def make_store(path, seismic: np.ndarray, grid: dict, schema_version: int = 1):
+def make_store(path, seismic: np.ndarray, grid: dict, schema_version: int | None = None):
     """A minimal demseis-like Zarr v3 store: root array ``seismic`` and attrs grid/demseis."""
     import zarr
 
@@ -49,7 +49,10 @@ def make_store(path, seismic: np.ndarray, grid: dict, schema_version: int = 1):
                        chunks=(1,) + seismic.shape[1:], fill_value=np.nan)
     a[...] = seismic
     g.attrs["grid"] = grid
-    g.attrs["demseis"] = {"schema_version": schema_version, "package_version": "0.1.0"}
+    from demseis.datasets import SCHEMA_VERSION
+
+    version = SCHEMA_VERSION if schema_version is None else schema_version
+    g.attrs["demseis"] = {"schema_version": version, "package_version": "0.1.0"}
     return path
 
 

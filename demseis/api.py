@@ -1,0 +1,251 @@
+"""The Python front door: :func:`generate`, :func:`open`, :func:`score` and :class:`Store`.
+
+Re-exported lazily by :mod:`demseis` (``demseis.generate`` ...), so ``import demseis`` stays
+light; dask, torch and xarray are imported only by the calls that need them::
+
+    import demseis
+    store = demseis.generate("tiny", out="t.zarr")      # a preset, a TOML path, a dict or a Config
+    print(store)                                        # samples, shape, arrays, parameters
+    s = store.sample(0)                                 # {"seismic": (H, W) array, ..., "freq_hz": 20.0, ...}
+    store.params["dip_deg"]                             # (N,) per-sample parameter table
+    ds = store.torch_dataset(crop=128, split="train")   # a torch Dataset (FaultSegDataset)
+    xr = store.to_xarray()                              # an xarray.Dataset (needs xarray)
+    result = demseis.score(pred, store, by=("freq_hz",))
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from demseis.errors import InputError, StoreError
+
+
+def _decode(name: str, values: np.ndarray, codes: dict[str, Any], attrs: dict[str, Any]
+            ) -> np.ndarray:
+    """A categorical parameter as strings (integer codes decoded with the store's names)."""
+    names = attrs.get("categories") or codes.get(name)
+    if names is None or values.dtype.kind not in "iu":
+        return values
+    table = np.asarray(list(names) + ["?"], dtype=str)
+    idx = np.where((values >= 0) & (values < len(names)), values, len(names))
+    return table[idx]
+
+
+class Store:
+    """A demseis store: its samples, per-sample parameters and views for training and analysis.
+
+    Parameters
+    ----------
+    path : str or Path
+        The store directory (``demseis generate --out``). It is checked on opening: a missing
+        path, a foreign Zarr store or another schema version raises :class:`StoreError`.
+
+    Attributes
+    ----------
+    path : Path
+    layout : demseis.datasets.StoreLayout
+        Shards, samples per shard, sample shape, array and parameter dtypes.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        from demseis.datasets import open_store, store_layout
+
+        self.path = Path(path)
+        self._root = open_store(self.path, "r")
+        self.layout = store_layout(self._root)
+        self._params: dict[str, np.ndarray] | None = None
+        #: what :func:`generate` did (a SweepSummary), None for an opened store
+        self.run_summary: Any = None
+
+    # ---- sizes and metadata ---------------------------------------------------------------
+    def __len__(self) -> int:
+        """Number of samples (complete or not; see :attr:`done`)."""
+        return self.layout.n_samples
+
+    @property
+    def attrs(self) -> dict[str, Any]:
+        """The store's root attributes (``config``, ``grid``, ``demseis``, ``failures`` ...)."""
+        return dict(self._root.attrs)
+
+    @property
+    def config(self) -> dict[str, Any]:
+        """The resolved config the store was generated with."""
+        return dict(self.attrs.get("config", {}))
+
+    @property
+    def arrays(self) -> tuple[str, ...]:
+        """Names of the per-sample arrays (``seismic``, ``fault``, ...)."""
+        return tuple(self.layout.arrays)
+
+    @property
+    def done(self) -> np.ndarray:
+        """(N,) bool: the samples whose shard is complete."""
+        from demseis.datasets.read import done_samples
+
+        return done_samples(self._root, len(self), self.path, require_any=False)
+
+    @property
+    def params(self) -> dict[str, np.ndarray]:
+        """The per-sample parameter table: name -> (N,) array (categorical ones as strings).
+
+        ``demseis params`` and ``docs/parameters.md`` describe every column.
+        """
+        if self._params is None:
+            from demseis.datasets.read import read_params
+
+            codes = self.attrs.get("param_codes", {}) or {}
+            raw = read_params(self._root, len(self))
+            self._params = {
+                k: _decode(k, v, codes, dict(self._root["params"][k].attrs))
+                for k, v in raw.items()
+            }
+        return self._params
+
+    def sample(self, index: int) -> dict[str, Any]:
+        """Sample ``index``: every array as (H, W) NumPy and every parameter as a scalar.
+
+        Raises
+        ------
+        InputError
+            ``index`` is out of range.
+        StoreError
+            Its shard is not complete (nothing valid was written there).
+        """
+        n = len(self)
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) \
+                or not -n <= index < n:
+            raise InputError(f"sample {index!r} is out of range: the store has samples 0..{n - 1}")
+        i = int(index) % n
+        if not self.done[i]:
+            raise StoreError(f"sample {i} of {str(self.path)!r} belongs to a shard that is not "
+                             "complete; finish the sweep first (rerun demseis generate)")
+        from demseis.datasets import read_sample
+
+        # checksums checked: a damaged sample is a StoreError naming the sample and the array
+        out: dict[str, Any] = dict(read_sample(self.path, i, self.arrays).arrays)
+        for k, v in self.params.items():
+            out[k] = v[i].item() if hasattr(v[i], "item") else v[i]
+        return out
+
+    def summary(self) -> str:
+        """What ``demseis info`` prints: samples, shapes, parameter ranges, config, failures."""
+        from demseis.datasets.read import store_summary
+
+        return "\n".join(store_summary(self.path))
+
+    def __repr__(self) -> str:
+        lay = self.layout
+        h, w = lay.shape
+        grid = self.attrs.get("grid", {})
+        domain = grid.get("domain", "depth")
+        cell = f"{grid.get('cell_m', '?')} m cells" if domain == "depth" else "time samples"
+        n_done = int(self.done.sum())
+        return (f"<demseis.Store {str(self.path)!r}: {len(self)} samples ({n_done} done) from "
+                f"{lay.n_shards} DEM runs of {lay.samples_per_shard}; {h} x {w} {cell}; "
+                f"arrays {', '.join(self.arrays)}; {len(lay.params)} per-sample parameters>")
+
+    # ---- views ------------------------------------------------------------------------------
+    def torch_dataset(self, **kwargs: Any) -> Any:
+        """A PyTorch Dataset of this store (:class:`demseis.datasets.FaultSegDataset`).
+
+        Keyword arguments go to :class:`~demseis.datasets.FaultSegDataset` (``inputs``,
+        ``targets``, ``crop``, ``split``, ``where``, ``transform``, ``seed`` ...).
+        """
+        from demseis.datasets import FaultSegDataset
+
+        return FaultSegDataset(self.path, **kwargs)
+
+    def to_xarray(self) -> Any:
+        """The samples as a lazy :class:`xarray.Dataset` (:func:`demseis.datasets.to_xarray`):
+        coordinates in metres (x, depth) or seconds (twt), units, parameters along ``sample``."""
+        from demseis import datasets
+
+        return datasets.to_xarray(self.path)
+
+
+def _resolve_config(config: Any) -> Any:
+    """A :class:`~demseis.generator.config.Config` from a Config, a dict, a preset name or a
+    TOML path."""
+    from demseis.generator.config import PRESETS, Config, load_config, parse_config
+
+    if isinstance(config, Config):
+        return config
+    if isinstance(config, dict):
+        return parse_config(config, source="config dict")
+    if config is None:
+        return load_config()
+    if isinstance(config, str) and config in PRESETS:
+        return load_config(preset=config)
+    if isinstance(config, (str, Path)):
+        return load_config(config)
+    raise InputError(f"config {config!r}: give a preset name ({', '.join(PRESETS)}), a TOML "
+                     "path, a dict or a demseis.generator.config.Config")
+
+
+def generate(config: Any = None, *, out: str | Path, workers: int | None = None,
+             overwrite: bool = False, scheduler: str | None = None,
+             progress: bool = False) -> Store:
+    """Run a sweep and write its labelled samples to the store ``out``; return the :class:`Store`.
+
+    Rerunning with the same config on an existing store completes only the missing shards.
+
+    Parameters
+    ----------
+    config : str, Path, dict or Config, optional
+        A preset name (``"tiny"``, ``"quick"``, ``"seed"``), a TOML file (layered on the
+        ``quick`` preset), a config dict, or a parsed Config. Default: the ``quick`` preset.
+    out : the store directory.
+    workers : dask worker processes (default: all cores; 0 = run in this process, no dask).
+    overwrite : replace an existing store written with a different config.
+    scheduler : address of an existing dask scheduler (instead of ``workers``).
+    progress : show a progress bar on stderr.
+
+    Returns
+    -------
+    Store
+        Its ``run_summary`` attribute holds what the sweep did (runs computed, failed, timing).
+        Failed runs are recorded in the store (``store.attrs["failures"]``); their samples are
+        not done.
+    """
+    from demseis.generator.sweep import run_sweep
+
+    cfg = _resolve_config(config)
+    if workers is not None and scheduler is not None:
+        raise InputError("give either workers or scheduler, not both")
+    summary = run_sweep(cfg, out, workers=workers, scheduler=scheduler, overwrite=overwrite,
+                        progress=progress)
+    store = Store(out)
+    store.run_summary = summary
+    return store
+
+
+def open(path: str | Path) -> Store:  # noqa: A001 - demseis.open, like xarray.open_dataset
+    """Open an existing demseis store read-only."""
+    return Store(path)
+
+
+def score(pred: Any, store: Store | str | Path, **kwargs: Any) -> Any:
+    """Score fault predictions against a store's labels (:func:`demseis.evaluation.scoring.score_store`).
+
+    Parameters
+    ----------
+    pred : (N_pred, H, W) array of probabilities in [0, 1], or a ``.npy`` / Zarr path.
+    store : a :class:`Store` or its path.
+    **kwargs : ``indices``, ``threshold``, ``tolerance_px``, ``by``, ``bins``, ``thresholds``,
+        ``progress``.
+
+    Returns
+    -------
+    demseis.evaluation.scoring.StoreScore
+        ``.overall`` (precision, recall, F1, IoU, ODS/OIS/AP), ``.rows`` per group,
+        ``.table()``, ``.write(prefix)``.
+    """
+    from demseis.evaluation.scoring import score_store
+
+    return score_store(pred, store, **kwargs)
+
+
+__all__ = ["Store", "generate", "open", "score"]

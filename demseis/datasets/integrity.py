@@ -1,0 +1,129 @@
+"""Checksums of a demseis store: which done shard, sample and array is damaged.
+
+Every chunk of a schema-2 store ends with the crc32c of its encoded bytes (zarr's ``crc32c``
+codec, the last codec of every array), and every shard file ends with a checksummed index.
+These functions verify those checksums straight from the files, without decoding: a done shard
+costs one read of its bytes. ``validate`` reports what they find, a resumed sweep rewrites the
+damaged shards (:func:`demseis.datasets.shard_status` with ``verify=True``), and the readers
+(:class:`~demseis.datasets.FaultSegDataset`, :func:`~demseis.datasets.read_sample`) check the
+same checksums on every chunk they read.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from demseis.datasets._shardio import CRC_NBYTES, check_chunk_file, check_shard_file, crc_ok
+from demseis.datasets.store import PARTICLE_FIELDS, open_store, store_layout
+
+
+def read_done_flags(path: str | Path, n_shards: int, array=None) -> tuple[np.ndarray, list[int]]:
+    """Done flags read from the ``shard_done`` chunk files, with their checksums checked.
+
+    ``array`` (the open ``shard_done`` array, optional): when its codecs do not end in
+    ``crc32c`` (a store assembled by hand, not by :func:`create_store`), it is read through
+    zarr instead, unchecked.
+
+    Returns
+    -------
+    (flags, damaged)
+        (n_shards,) uint8 flags (a missing chunk is 0: zarr deletes a chunk set to its fill
+        value; a damaged one is 0 too) and the shards whose flag chunk is damaged.
+    """
+    if array is not None and _last_codec(array) != "crc32c":
+        return np.asarray(array[...], dtype=np.uint8), []
+    flags = np.zeros(n_shards, dtype=np.uint8)
+    damaged = []
+    base = Path(path) / "shard_done" / "c"
+    for k in range(n_shards):
+        try:
+            data = (base / str(k)).read_bytes()
+        except FileNotFoundError:
+            continue
+        arr = np.frombuffer(data, dtype=np.uint8)
+        if arr.shape[0] != 1 + CRC_NBYTES or not crc_ok(arr):
+            damaged.append(k)
+        else:
+            flags[k] = arr[0]
+    return flags, damaged
+
+
+def _last_codec(array) -> str | None:
+    codecs = array.metadata.to_dict().get("codecs", ())
+    return codecs[-1].get("name") if codecs else None
+
+
+def _fmt(values: list[int], limit: int = 8) -> str:
+    vals = [str(v) for v in values[:limit]]
+    more = len(values) - limit
+    return ", ".join(vals) + (f" ... (+{more})" if more > 0 else "")
+
+
+def shard_damage(path: str | Path, k: int, group=None, layout=None) -> list[str]:
+    """One line per damaged file of shard ``k`` (empty when every checksum holds).
+
+    Checks each sample array's shard file (index and every chunk, naming the damaged samples),
+    each parameter's chunk, and each particle array of the shard's DEM run (when stored).
+    A never-written chunk of a sample array or parameter is reported too.
+    """
+    path = Path(path)
+    group = open_store(path, "r+") if group is None else group
+    layout = store_layout(group) if layout is None else layout
+    s = layout.samples_per_shard
+    s0 = k * s
+    out = []
+    for name in layout.arrays:
+        index_problem, damaged, empty = check_shard_file(path / name / "c" / str(k) / "0" / "0", s)
+        if index_problem == "missing":
+            out.append(f"shard {k}: {name} samples {s0}..{s0 + s - 1} were never written "
+                       "(shard file missing)")
+            continue
+        if index_problem:
+            out.append(f"shard {k}: {name} is damaged in samples {s0}..{s0 + s - 1} "
+                       f"({index_problem} in the shard file)")
+            continue
+        if damaged:
+            out.append(f"shard {k}: {name} is damaged in samples "
+                       f"{_fmt([s0 + i for i in damaged])} (crc32c mismatch)")
+        if empty:
+            out.append(f"shard {k}: {name} samples {_fmt([s0 + i for i in empty])} were never "
+                       "written")
+    run_id = k
+    for name in layout.params:
+        f = path / "params" / name / "c" / str(k)
+        if not f.is_file():
+            out.append(f"shard {k}: parameter {name} of samples {s0}..{s0 + s - 1} was never "
+                       "written")
+            continue
+        problem = check_chunk_file(f)
+        if problem:
+            out.append(f"shard {k}: parameter {name} is damaged in samples {s0}..{s0 + s - 1} "
+                       f"({problem})")
+        elif name == "run_id":
+            ids = np.unique(group["params"]["run_id"][s0: s0 + s])
+            run_id = int(ids[0]) if ids.size == 1 else k
+    run_dir = path / "particles" / f"run_{run_id:05d}"
+    if (run_dir / "zarr.json").is_file():
+        for name in PARTICLE_FIELDS:
+            f = run_dir / name / "c" / "0"
+            problem = check_chunk_file(f) if f.is_file() else "file missing"
+            if problem:
+                out.append(f"shard {k}: particles of run {run_id} are damaged: {name} ({problem})")
+    return out
+
+
+def damaged_shards(path: str | Path, group=None) -> dict[int, list[str]]:
+    """Damage of every done shard: shard -> problem lines (only damaged shards; a damaged
+    done flag counts as a damaged shard)."""
+    group = open_store(path, "r+") if group is None else group
+    layout = store_layout(group)
+    flags, bad_flags = read_done_flags(path, layout.n_shards, group["shard_done"])
+    out: dict[int, list[str]] = {k: [f"shard {k}: done flag is damaged (crc32c mismatch)"]
+                                 for k in bad_flags}
+    for k in np.flatnonzero(flags == 1).tolist():
+        problems = shard_damage(path, k, group, layout)
+        if problems:
+            out[k] = problems
+    return dict(sorted(out.items()))

@@ -1,0 +1,367 @@
+"""Every parameter of demseis, declared once: name, unit, range, default, doc and level.
+
+Config validation (:mod:`demseis.generator.config`), the stage checks (the DEM's
+:func:`~demseis.dem.engine.validate_material` and :func:`~demseis.dem.fault.validate_fault`, the
+rock-property model's :meth:`~demseis.seismic.PropertyModel.validate`, the wavelet and noise
+checks), the defaults of :class:`~demseis.dem.Material` and
+:class:`~demseis.seismic.PropertyModel`, ``demseis params`` and the table in
+``docs/parameters.md`` all read :data:`PARAMS`. So a config a stage would refuse is refused when
+it is loaded, before any work starts.
+
+Levels say where a value is drawn:
+
+- ``sweep``: one value for the whole sweep (``[model]``, ``[grid]``, ``[output]`` and the
+  ``seed``, ``n_runs``, ``renders_per_snapshot`` keys of ``[sweep]``);
+- ``run``: one value per DEM run (a ``[sweep]`` key: fixed, a list or a distribution);
+- ``sample``: one value per rendered sample (a ``[sweep]`` key).
+
+:data:`STORED` declares the per-sample values a store holds besides the ``run`` and ``sample``
+parameters: the ones derived per snapshot (the throw reached, the integrator step) or per sample.
+
+This module imports only the standard library and :mod:`demseis.errors`; every stage may import it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from demseis.errors import ConfigError, DemseisError
+
+INF = math.inf
+LEVELS = ("sweep", "run", "sample")
+#: most basement faults of a fault system (demseis.dem.basement)
+MAX_BASEMENT_FAULTS = 5
+
+
+@dataclass(frozen=True)
+class Param:
+    """What one parameter may be.
+
+    Attributes
+    ----------
+    name : the key in its config section.
+    kind : ``float``, ``int``, ``str`` or ``bool``.
+    level : ``"sweep"``, ``"run"`` or ``"sample"`` (see the module docstring).
+    default : the value used when the key is absent.
+    lo, hi : numeric bounds (None = unbounded); ``hi = inf`` admits inf.
+    choices : allowed values of a ``str`` parameter.
+    doc : one line for ``demseis params`` and the docs.
+    unit : SI unit ("" for dimensionless).
+    section : the config table that holds it (``sweep``, ``model``, ``grid``, ``output``).
+    lo_open, hi_open : the bound itself is excluded.
+    """
+
+    name: str
+    kind: type
+    level: str
+    default: Any
+    lo: float | None = None
+    hi: float | None = None
+    choices: tuple[str, ...] | None = None
+    doc: str = ""
+    unit: str = ""
+    section: str = "sweep"
+    lo_open: bool = False
+    hi_open: bool = False
+
+    def allowed(self) -> str:
+        """Human description of the admissible values, e.g. ``a number in [10, 80]``."""
+        if self.choices is not None:
+            return "one of " + ", ".join(repr(c) for c in self.choices)
+        if self.kind is bool:
+            return "true or false"
+        kind = "an integer" if self.kind is int else "a number"
+        lo = None if self.lo is None else ("(" if self.lo_open else "[") + _fmt(self.lo)
+        hi = None if self.hi is None else _fmt(self.hi) + (")" if self.hi_open else "]")
+        if lo is not None and hi is not None:
+            return f"{kind} in {lo}, {hi}"
+        if lo is not None:
+            return f"{kind} {'>' if self.lo_open else '>='} {_fmt(self.lo)}"
+        if hi is not None:
+            return f"{kind} {'<' if self.hi_open else '<='} {_fmt(self.hi)}"
+        return kind
+
+    def range_text(self) -> str:
+        """The range column of the parameter table."""
+        if self.choices is not None:
+            return ", ".join(self.choices)
+        if self.kind is bool:
+            return "true, false"
+        return self.allowed().split(" ", 2)[-1].removeprefix("in ")
+
+    def in_range(self, value: float) -> bool:
+        """Whether a number lies within the bounds."""
+        if self.lo is not None and (value < self.lo or (self.lo_open and value == self.lo)):
+            return False
+        if self.hi is not None and (value > self.hi or (self.hi_open and value == self.hi)):
+            return False
+        return True
+
+    def check_value(self, value: Any, where: str,
+                    error: type[DemseisError] = ConfigError) -> Any:
+        """Coerce and check one value; raise ``error`` naming ``where``, the value and the range.
+
+        Integers are accepted for floats, ``"inf"`` for a float whose range admits inf.
+        """
+        coerced, ok = self._coerce(value)
+        if not ok:
+            raise error(f"{where} = {value!r} is not allowed: expected {self.allowed()}")
+        return coerced
+
+    def _coerce(self, value: Any) -> tuple[Any, bool]:
+        """(coerced value, whether it is allowed); the error is only formatted on failure."""
+        if self.kind is bool:
+            return value, isinstance(value, bool)
+        if self.kind is str:
+            return value, isinstance(value, str) and not (self.choices and value not in self.choices)
+        if isinstance(value, str) and self.kind is float and value.strip().lower() in ("inf", "+inf"):
+            value = math.inf
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            try:  # numpy scalars
+                value = value.item()
+            except AttributeError:
+                return value, False
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                return value, False
+        if self.kind is int:
+            if isinstance(value, float) and not value.is_integer():
+                return value, False
+            value = int(value)
+        else:
+            value = float(value)
+            if math.isnan(value):
+                return value, False
+        if not self.in_range(value):
+            return value, False
+        if self.kind is float and math.isinf(value) and self.hi != math.inf:
+            return value, False
+        return value, True
+
+def _fmt(x: float) -> str:
+    if x == math.inf:
+        return "inf"
+    return f"{x:g}"
+
+
+def _p(name: str, kind: type, level: str, default: Any, lo: float | None = None,
+       hi: float | None = None, *, unit: str = "", doc: str = "", section: str = "sweep",
+       choices: tuple[str, ...] | None = None, lo_open: bool = False,
+       hi_open: bool = False) -> Param:
+    return Param(name, kind, level, default, lo, hi, choices, doc, unit, section, lo_open, hi_open)
+
+
+_DECLARED: tuple[Param, ...] = (
+    # ---- [sweep]: how many runs, the root seed -------------------------------------------
+    _p("seed", int, "sweep", 0, 0, 2**63 - 1, doc="root seed of the sweep's SeedSequence tree"),
+    _p("n_runs", int, "sweep", 4, 1, 10**7, doc="number of DEM runs (one store shard each)"),
+    _p("renders_per_snapshot", int, "sweep", 1, 1, 10**4,
+       doc="extra draws of the sample-level distributions per snapshot and grid combination"),
+    # ---- [sweep], per run: the basement fault -------------------------------------------
+    _p("dip_deg", float, "run", 45.0, 10.0, 80.0, unit="deg", doc="basement fault dip"),
+    _p("throw_m", float, "run", 450.0, 1.0, 1.0e5, unit="m",
+       doc="final vertical throw of the basement fault (at most 0.6 model height)"),
+    _p("fault_x_frac", float, "run", 0.5, 0.05, 0.95,
+       doc="x where the basement fault meets the model base, as a fraction of the width"),
+    _p("dip_direction", str, "run", "right", choices=("right", "left"),
+       doc="side of the hanging wall"),
+    # ---- per run: fault systems (demseis.dem.basement; "single" + "normal" is the fault above)
+    _p("structure", str, "run", "single",
+       choices=("single", "domino", "graben", "horst", "half_graben"),
+       doc="basement structure: one fault, a domino (synthetic) set, graben, horst, or "
+           "half-graben (one listric fault); dip_deg and throw_m apply to every fault"),
+    _p("n_faults", int, "run", 1, 1, MAX_BASEMENT_FAULTS,
+       doc="faults of a domino set (graben and horst have 2, the others 1)"),
+    _p("fault_kind", str, "run", "normal", choices=("normal", "reverse", "listric"),
+       doc="kind of the faults of single/domino/graben/horst (a half-graben is listric; a "
+           "listric fault must bound an end block, so a listric domino/graben/horst is normal)"),
+    _p("fault_spacing_frac", float, "run", 0.2, 0.08, 0.4,
+       doc="domino fault spacing, or graben/horst width, as a fraction of the model width"),
+    _p("listric_radius_m", float, "run", 5000.0, 1500.0, 20000.0, unit="m",
+       doc="radius of curvature of a listric fault (its throw is capped at 80% of the arc's "
+           "depth)"),
+    _p("strength_contrast", float, "run", 1.0, 1.0, 16.0,
+       doc="mechanical stratigraphy: cohesion ratio of strong (sandstone, limestone) to weak "
+           "(shale) layers; 1 = uniform mechanics (demseis.dem.strata)"),
+    # ---- per run: layering ---------------------------------------------------------------
+    _p("n_layers", int, "run", 48, 1, 250, doc="number of pre-kinematic layers"),
+    _p("layer_thickness_cv", float, "run", 0.0, 0.0, 0.9,
+       doc="coefficient of variation of layer thicknesses (0 = equal thicknesses)"),
+    # ---- per run: mechanics (demseis.dem.Material) ---------------------------------------
+    _p("density_kg_m3", float, "run", 2500.0, 500.0, 6000.0, unit="kg/m^3",
+       doc="element density; mass = density * pi r^2 (unit thickness)"),
+    _p("kn_n_m", float, "run", 1.0e10, 1.0e6, 1.0e13, unit="N/m",
+       doc="normal contact stiffness Kn (dt ~ Kn^-1/2: 4e10 doubles a run's cost, 1e13 ~30x)"),
+    _p("ks_ratio", float, "run", 0.5, 0.0, 2.0, lo_open=True, doc="shear stiffness Ks / Kn"),
+    _p("friction", float, "run", 0.4, 0.0, 2.0,
+       doc="contact friction coefficient mu (slider |Fs| <= C0 + mu Fn)"),
+    _p("cohesion_n", float, "run", 5.0e7, 0.0, 1.0e12, unit="N", doc="contact cohesion C0"),
+    _p("bond_strain", float, "run", 0.02, 1.0e-5, 1.0, hi_open=True,
+       doc="bond-breaking strain r0: a bond breaks when d - R > r0 R"),
+    _p("contact_model", str, "run", "frictional", choices=("frictional", "bonded", "brittle"),
+       doc="frictional-cohesive (cohesion heals: ductile), bonded (tensile bonds), or brittle "
+           "(bonds broken by tension or shear, cohesion lost with them: faults localise)"),
+    _p("damping_scale", float, "run", 3.0e8, 0.0, 1.0e13, unit="N s/m per s",
+       doc="global viscous damping eta = dt * damping_scale"),
+    _p("gravity_m_s2", float, "run", 9.81, 0.0, 100.0, unit="m/s^2", doc="gravity"),
+    # ---- per run: rock properties (demseis.seismic.PropertyModel scalars) ---------------
+    _p("gardner_a", float, "run", 310.0, 100.0, 1000.0,
+       doc="Gardner coefficient: rho = a Vp^b (rho in kg/m^3, Vp in m/s)"),
+    _p("gardner_b", float, "run", 0.25, 0.1, 0.5, doc="Gardner exponent b"),
+    _p("vp_scatter", float, "run", 0.03, 0.0, 0.2,
+       doc="relative std of per-element Vp around the layer Vp"),
+    _p("rho_scatter", float, "run", 0.01, 0.0, 0.2, doc="relative std of per-element density"),
+    _p("gaussian_sigma_cells", float, "run", 0.7, 0.0, 5.0, unit="cells",
+       doc="std of the Gaussian smoothing of the property grids (0 = off)"),
+    _p("median_size_cells", int, "run", 3, 1, 9, unit="cells",
+       doc="width of the square median filter, odd (1 = off)"),
+    # ---- per sample: rendering -----------------------------------------------------------
+    _p("freq_hz", float, "sample", 40.0, 1.0, 500.0, unit="Hz", doc="Ricker peak frequency"),
+    _p("snr_db", float, "sample", INF, -40.0, INF, unit="dB",
+       doc="signal-to-noise ratio 20 log10(rms signal / rms noise); inf = no noise"),
+    _p("noise_kind", str, "sample", "white", choices=("white", "band"),
+       doc="white or band-limited (signal band) noise"),
+    _p("imaging", str, "sample", "1d", choices=("1d", "psf"),
+       doc="1-D convolution, or the 2-D dip-limited point-spread function (docs/seismic.md)"),
+    _p("psf_max_angle_deg", float, "sample", 30.0, 1.0, 90.0, unit="deg",
+       doc="maximum illumination angle of the PSF; 90 = no dip limit"),
+    _p("psf_aperture_m", float, "sample", 0.0, 0.0, 1.0e6, unit="m",
+       doc="survey half-aperture L of the PSF: angle <= arctan(L / depth); 0 = no limit"),
+    # ---- [model]: the DEM box and run control -------------------------------------------
+    _p("width_m", float, "sweep", 2400.0, 100.0, 1.0e5, unit="m", section="model",
+       doc="model box width"),
+    _p("height_m", float, "sweep", 1200.0, 50.0, 1.0e5, unit="m", section="model",
+       doc="model box height"),
+    _p("radius_min_m", float, "sweep", 12.5, 0.1, 1.0e3, unit="m", section="model",
+       doc="smallest element radius (radii log-uniform in [min, max])"),
+    _p("radius_max_m", float, "sweep", 25.0, 0.1, 1.0e3, unit="m", section="model",
+       doc="largest element radius"),
+    _p("n_snapshots", int, "sweep", 4, 2, 1000, section="model",
+       doc="snapshots per run, equally spaced in throw; the first is the undeformed reference"),
+    _p("sedimentation", bool, "sweep", True, section="model",
+       doc="fill hanging-wall accommodation with growth layers"),
+    _p("wall_speed_m_s", float, "sweep", 5.0, 1.0e-3, 100.0, unit="m/s", section="model",
+       doc="speed of the moving basement along dip (model time)"),
+    # ---- [grid] ----------------------------------------------------------------------------
+    _p("cell_m", float, "sweep", 10.0, 0.5, 1000.0, unit="m", section="grid",
+       doc="raster cell size (seismic and labels share the grid)"),
+    # ---- [output] --------------------------------------------------------------------------
+    _p("impedance", bool, "sweep", False, section="output",
+       doc="also store the smoothed impedance grid"),
+    _p("domain", str, "sweep", "depth", choices=("depth", "time"), section="output",
+       doc="sections and labels in depth cells, or on a two-way-time axis"),
+    _p("dt_s", float, "sweep", 0.002, 1.0e-4, 0.02, unit="s", section="output",
+       doc="time-domain sample interval"),
+)
+
+#: every declared parameter by name
+PARAMS: dict[str, Param] = {p.name: p for p in _DECLARED}
+if len(PARAMS) != len(_DECLARED):  # pragma: no cover - a declaration error
+    raise RuntimeError("a parameter is declared twice in demseis.parameters")
+
+#: the ``[sweep]`` parameters that take a fixed value, a list or a distribution
+SCENARIO: dict[str, Param] = {k: p for k, p in PARAMS.items() if p.level in ("run", "sample")}
+
+#: :class:`demseis.dem.Material` field -> parameter name
+MATERIAL_FIELDS: dict[str, str] = {
+    "density_kg_m3": "density_kg_m3", "kn_n_m": "kn_n_m", "ks_ratio": "ks_ratio",
+    "friction": "friction", "cohesion_n": "cohesion_n", "bond_strain": "bond_strain",
+    "model": "contact_model", "damping_scale": "damping_scale", "gravity_m_s2": "gravity_m_s2",
+}
+
+#: scalar fields of :class:`demseis.seismic.PropertyModel` (the same names)
+PROPERTY_FIELDS: tuple[str, ...] = ("gardner_a", "gardner_b", "vp_scatter", "rho_scatter",
+                                    "gaussian_sigma_cells", "median_size_cells")
+
+
+@dataclass(frozen=True)
+class Stored:
+    """A per-sample value a store holds that is derived, not drawn (``params/<name>``)."""
+
+    name: str
+    dtype: str
+    level: str
+    unit: str
+    doc: str
+
+
+#: derived per-sample values in a store's ``params/`` (besides the run and sample parameters)
+STORED: tuple[Stored, ...] = (
+    Stored("run_id", "int32", "run", "", "DEM run index (the store shard)"),
+    Stored("sample_in_run", "int32", "sample", "", "sample index within its run"),
+    Stored("snapshot", "int16", "snapshot", "", "snapshot index (0 = undeformed reference)"),
+    Stored("step", "int64", "snapshot", "", "integrator step at which the snapshot was taken"),
+    Stored("throw_m", "float32", "snapshot", "m", "basement throw reached at the snapshot"),
+    Stored("throw_target_m", "float32", "run", "m", "final basement throw of the run"),
+    Stored("fault_x_m", "float32", "run", "m", "x where the basement fault meets the base"),
+    Stored("n_elements", "int32", "snapshot", "", "elements in the snapshot (deposits included)"),
+    Stored("noise_seed", "uint64", "sample", "", "seed of the sample's noise Generator"),
+    Stored("n_basement_faults", "int8", "run", "", "basement faults of the run (1-5)"),
+    Stored("has_fault", "uint8", "snapshot", "", "1 if the fault label has any fault cell"),
+    Stored("n_faults", "int16", "snapshot", "", "fault instances in the label"),
+    Stored("max_slip_m", "float32", "snapshot", "m", "largest slip on the labelled traces"),
+) + tuple(
+    Stored(f"fault{k}_{field}", dtype, level, unit, f"basement fault {k} (by x): {doc}; -1 if "
+           "the run has fewer faults")
+    for k in range(MAX_BASEMENT_FAULTS)
+    for field, dtype, level, unit, doc in (
+        ("kind", "int8", "run", "", "kind code (0 normal, 1 reverse, 2 listric)"),
+        ("x_m", "float32", "run", "m", "x where it meets the top of the basement"),
+        ("dip_deg", "float32", "run", "deg", "dip at the top of the basement"),
+        ("dip_direction", "int8", "run", "", "dip direction code (0 right, 1 left)"),
+        ("throw_target_m", "float32", "run", "m", "final throw"),
+        ("throw_m", "float32", "snapshot", "m", "throw reached at the snapshot"),
+    )
+)
+
+
+def param(name: str) -> Param:
+    """The declaration of ``name``; :class:`KeyError` naming the known ones."""
+    try:
+        return PARAMS[name]
+    except KeyError:
+        raise KeyError(f"no parameter {name!r}; declared: {', '.join(sorted(PARAMS))}") from None
+
+
+def check(name: str, value: Any, where: str, error: type[DemseisError]) -> Any:
+    """Check ``value`` against the declaration of ``name`` (see :meth:`Param.check_value`)."""
+    return PARAMS[name].check_value(value, where, error)
+
+
+def table_rows() -> list[tuple[str, str, str, str, str, str, str]]:
+    """(name, section, level, unit, range, default, doc) of every parameter, then the stored ones."""
+    rows = []
+    for p in _DECLARED:
+        default = p.default
+        if isinstance(default, bool):
+            text = "true" if default else "false"
+        elif isinstance(default, float):
+            text = _fmt(default)
+        else:
+            text = str(default)
+        rows.append((p.name, p.section, p.level, p.unit, p.range_text(), text, p.doc))
+    return rows
+
+
+def markdown_table() -> str:
+    """The parameter tables of ``docs/parameters.md`` (generated; a test compares them)."""
+    lines = ["| name | section | level | unit | range | default | description |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for row in table_rows():
+        lines.append("| " + " | ".join(f"`{row[0]}`" if i == 0 else c.replace("|", "\\|")
+                                        for i, c in enumerate(row)) + " |")
+    lines += ["", "Stored per sample in `params/` besides the run and sample parameters above:", "",
+              "| name | dtype | level | unit | description |", "| --- | --- | --- | --- | --- |"]
+    for s in STORED:
+        lines.append(f"| `{s.name}` | {s.dtype} | {s.level} | {s.unit} | {s.doc} |")
+    return "\n".join(lines) + "\n"
+
+
+def text_table() -> str:
+    """The table ``demseis params`` prints."""
+    rows = [("name", "section", "level", "unit", "range", "default", "description")]
+    rows += table_rows()
+    widths = [max(len(r[i]) for r in rows) for i in range(6)]
+    return "\n".join("  ".join(c.ljust(w) for c, w in zip(r[:6], widths)) + "  " + r[6]
+                     for r in rows) + "\n"

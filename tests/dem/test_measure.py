@@ -1,0 +1,88 @@
+"""Particle measures against hand-built snapshots with known answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from demseis.dem.measure import (displacement_jump, horizon_profile, horizon_step,
+                                 section_length, slip_sense)
+from demseis.types import Snapshot
+
+
+def snapshot(xy, layer, ids=None):
+    n = len(xy)
+    return Snapshot(index=0, step=0, throw_m=0.0,
+                    ids=np.arange(n, dtype=np.int64) if ids is None else ids,
+                    xy=np.asarray(xy, float), radius=np.full(n, 10.0),
+                    layer=np.asarray(layer, np.int16), deposited=np.zeros(n, bool))
+
+
+def horizon(shape, throw=200.0, x_f=1000.0):
+    """A layer-3 horizon at y = 500 - shape(x) * throw, sampled every 5 m, with layer-2
+    elements below it (which must be ignored)."""
+    x = np.arange(0.0, 2000.0, 5.0)
+    y = 500.0 - throw * shape(x - x_f)
+    xy = np.r_[np.c_[x, y], np.c_[x, y - 60.0]]
+    return snapshot(xy, np.r_[np.full(x.size, 3), np.full(x.size, 2)])
+
+
+def test_step_of_a_discrete_offset_is_the_throw():
+    s = horizon(lambda u: (u > 0).astype(float))
+    assert horizon_step(s, 3, 1000.0) == pytest.approx(200.0)
+    # seen with the hanging wall on the other side it is a rise, not a drop
+    assert horizon_step(s, 3, 1000.0, dip_direction="left") == pytest.approx(0.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("width", [400.0, 1000.0])
+def test_step_of_a_monocline_is_throw_times_window_over_width(width):
+    s = horizon(lambda u: np.clip(u / width + 0.5, 0.0, 1.0))
+    assert horizon_step(s, 3, 1000.0, window_m=100.0) == pytest.approx(200.0 * 100.0 / width,
+                                                                      rel=0.02)
+
+
+def test_profile_is_the_median_per_column():
+    s = snapshot([[10, 1.0], [20, 3.0], [30, 2.0], [60, 9.0]], [0, 0, 0, 0])
+    np.testing.assert_allclose(horizon_profile(s, 0, np.array([0.0, 50.0, 100.0, 150.0])),
+                               [2.0, 9.0, np.nan])
+
+
+def test_displacement_jump_of_rigid_blocks():
+    rng = np.random.default_rng(0)
+    p = np.c_[rng.uniform(0, 2000, 4000), rng.uniform(0, 400, 4000)]
+    dip, xf = 60.0, 1000.0
+    hw = p[:, 0] > xf - p[:, 1] / np.tan(np.radians(dip))
+    slip = 50.0
+    d = np.where(hw[:, None], slip * np.array([np.cos(np.radians(dip)),
+                                               -np.sin(np.radians(dip))]), 0.0)
+    s0, s1 = snapshot(p, np.zeros(4000)), snapshot(p + d, np.zeros(4000))
+    j = displacement_jump(s0, s1, xf, dip, "right", (0.0, 400.0))
+    assert slip_sense(j, dip, "right") == pytest.approx(slip)
+    # the same motion read as a reverse fault on a left-dipping plane is negative
+    s2 = snapshot(p - d, np.zeros(4000))
+    assert slip_sense(displacement_jump(s0, s2, xf, dip, "right", (0.0, 400.0)), dip,
+                      "right") == pytest.approx(-slip)
+
+
+def test_section_length():
+    s = snapshot([[5, 1], [700, 2], [300, 900]], [0, 0, 0])
+    assert section_length(s, 100.0) == 695.0
+    assert section_length(s, 1000.0, n_original=1) == 0.0
+
+
+def test_fault_crossings_follow_a_dipping_fault():
+    # horizons 3 and 5 offset by 150 m across a 60-degree fault through (1000, 0)
+    from demseis.dem.measure import fault_crossings
+
+    x = np.arange(0.0, 2000.0, 5.0)
+    xy, layer = [], []
+    for k, y0 in ((3, 300.0), (5, 600.0)):
+        xf = 1000.0 - y0 / np.tan(np.radians(60.0))
+        xy.append(np.c_[x, y0 - 150.0 * (x > xf)])
+        layer.append(np.full(x.size, k))
+    s = snapshot(np.concatenate(xy), np.concatenate(layer))
+    xs, ys = fault_crossings(s, [3, 5], 800.0)
+    np.testing.assert_allclose(xs, 1000.0 - np.array([300.0, 600.0]) / np.tan(np.radians(60.0)),
+                               atol=13.0)
+    dip = np.degrees(np.arctan2(ys[1] - ys[0], abs(xs[1] - xs[0])))
+    assert dip == pytest.approx(60.0, abs=5.0)
