@@ -20,6 +20,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from demseis.dem import detmath
 from demseis.dem.assembly import Assembly
 from demseis.dem.engine import Engine, time_step, validate_material
 from demseis.dem.types import Material, NormalFault, Snapshot
@@ -133,7 +134,8 @@ def _clear_of(pos: np.ndarray, radius: np.ndarray, new_xy: np.ndarray, new_r: np
     ok = np.ones(new_r.shape[0], dtype=bool)
     for i, near in enumerate(tree.query_ball_point(new_xy, reach)):
         if near:
-            d = np.hypot(*(pos[near] - new_xy[i]).T)
+            dxy = pos[near] - new_xy[i]
+            d = np.sqrt(dxy[:, 0] * dxy[:, 0] + dxy[:, 1] * dxy[:, 1])
             ok[i] = bool(np.all(d >= radius[near] + new_r[i] + gap))
     return ok
 
@@ -181,7 +183,7 @@ def simulate(asm: Assembly, fault: NormalFault, material: Material = Material(),
     if mirror:
         xy0[:, 0] = W - xy0[:, 0]
     dip = math.radians(fault.dip_deg)
-    cd, sd = math.cos(dip), math.sin(dip)
+    cd, sd = float(detmath.cos(dip)), float(detmath.sin(dip))  # same bits on every CPU
     rmin, rmax = asm.radius_min_m, asm.radius_max_m
 
     # dt from Eq. 5 with the smallest radius that can ever occur (sediment included)
