@@ -47,6 +47,8 @@ class SweepSummary:
     done_before: int
     completed: list[int] = field(default_factory=list)
     failed: dict[int, str] = field(default_factory=dict)
+    #: runs written now whose last snapshot has no fault pixel (the DEM made no fault)
+    no_fault: list[int] = field(default_factory=list)
     seconds: float = 0.0
     #: seconds from the first task submitted to the last finished (no cluster start-up)
     compute_seconds: float = 0.0
@@ -64,10 +66,19 @@ class SweepSummary:
             f"time: {self.seconds:.1f} s"
             + (f", {self.n_samples_written / self.seconds:.2f} samples/s" if self.seconds > 0 and self.completed else ""),
         ]
+        if self.no_fault:
+            out.append(f"{len(self.no_fault)} run(s) ended with no fault (no fault pixel in the "
+                       "last snapshot): " + ", ".join(str(r) for r in sorted(self.no_fault)))
         for shard, err in sorted(self.failed.items()):
             out.append(f"  run {shard} failed: {err}")
-        if self.failed:
-            out.append("rerun the same command to retry the failed runs")
+        unstable = [e for e in self.failed.values() if e.startswith("SimulationError")]
+        if unstable:
+            # the same config and seed give the same bits, so a rerun fails the same way
+            out.append("a DEM run that went unstable fails the same way when rerun: change its "
+                       "config (lower model.wall_speed_m_s, or raise sweep.damping_scale, or "
+                       "narrow the swept ranges) and write a new --out")
+        if len(unstable) < len(self.failed):
+            out.append("rerun the same command to retry the runs that failed for another reason")
         return out
 
 
@@ -146,8 +157,11 @@ def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, An
     except SimulationError as exc:
         return {"shard": shard, "error": f"SimulationError: {exc}"}
     write_shard(store, shard, data.arrays, data.params, data.snapshots)
+    snapshot = np.asarray(data.params["snapshot"])
+    last = snapshot == snapshot.max()
     return {"shard": shard, "seconds": time.perf_counter() - t0,
-            "samples": int(data.arrays["seismic"].shape[0])}
+            "samples": int(data.arrays["seismic"].shape[0]),
+            "no_fault": not bool(np.any(data.arrays["fault"][last]))}
 
 
 def warm_numba_cache() -> None:
@@ -161,7 +175,8 @@ def warm_numba_cache() -> None:
 
     raw_cfg = load_config(preset="tiny").to_dict()
     raw_cfg["sweep"].update(n_runs=1, n_layers=2, throw_m=20.0, dip_deg=60.0)
-    raw_cfg["model"].update(n_snapshots=2, width_m=300.0, height_m=200.0)
+    # 1 m/s: the run outlasts one damping relaxation time (demseis.generator.physics)
+    raw_cfg["model"].update(n_snapshots=2, width_m=300.0, height_m=200.0, wall_speed_m_s=1.0)
     cfg = parse_config(raw_cfg)
     spec = plan_run(cfg, 0)
     snaps, info = simulate_run(cfg, spec)
@@ -281,6 +296,8 @@ def _account(summary: SweepSummary, bar: Any, result: dict[str, Any]) -> None:
         summary.failed[result["shard"]] = result["error"]
     else:
         summary.completed.append(result["shard"])
+        if result.get("no_fault"):
+            summary.no_fault.append(result["shard"])
         bar.update(result["samples"])
 
 
