@@ -251,8 +251,16 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
     return ShardData(arrays=arrays, params=params, snapshots=snapshots)
 
 
-def run_shard(cfg: Config, run: int, progress: Callable[[float], None] | None = None) -> ShardData:
-    """DEM run ``run`` and all its renders."""
+def run_shard(cfg: Config, run: int, progress: Callable[[float], None] | None = None, *,
+              timings: dict[str, float] | None = None) -> ShardData:
+    """DEM run ``run`` and all its renders; ``timings`` (if given) gets dem_s and render_s."""
+    import time
+
+    t0 = time.perf_counter()
     spec = plan_run(cfg, run)
     snaps, info = simulate_run(cfg, spec, progress)
-    return render_run(cfg, spec, snaps, info)
+    t1 = time.perf_counter()
+    data = render_run(cfg, spec, snaps, info)
+    if timings is not None:
+        timings.update(dem_s=t1 - t0, render_s=time.perf_counter() - t1)
+    return data

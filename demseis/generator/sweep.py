@@ -52,6 +52,11 @@ class SweepSummary:
     seconds: float = 0.0
     #: seconds from the first task submitted to the last finished (no cluster start-up)
     compute_seconds: float = 0.0
+    #: wall seconds of the driver's phases: prepare (store), start (cluster + Numba warm-up,
+    #: overlapped), compute, close (cluster shutdown), finalize (failures + consolidation)
+    phase_seconds: dict[str, float] = field(default_factory=dict)
+    #: one record per finished task: shard, pid, start/end (epoch s), dem_s, render_s, write_s
+    tasks: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def n_samples_written(self) -> int:
@@ -150,18 +155,23 @@ def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, An
     """
     from demseis.datasets import write_shard
 
-    cfg = parse_config(cfg_dict)
+    start = time.time()
     t0 = time.perf_counter()
+    cfg = parse_config(cfg_dict)
+    timings: dict[str, float] = {}
     try:
-        data = run_shard(cfg, shard)
+        data = run_shard(cfg, shard, timings=timings)
     except SimulationError as exc:
         return {"shard": shard, "error": f"SimulationError: {exc}"}
+    t2 = time.perf_counter()
     write_shard(store, shard, data.arrays, data.params, data.snapshots)
+    t3 = time.perf_counter()
     snapshot = np.asarray(data.params["snapshot"])
     last = snapshot == snapshot.max()
-    return {"shard": shard, "seconds": time.perf_counter() - t0,
-            "samples": int(data.arrays["seismic"].shape[0]),
-            "no_fault": not bool(np.any(data.arrays["fault"][last]))}
+    return {"shard": shard, "seconds": t3 - t0, "samples": int(data.arrays["seismic"].shape[0]),
+            "no_fault": not bool(np.any(data.arrays["fault"][last])), "pid": os.getpid(),
+            "start": start, "end": time.time(), "dem_s": timings.get("dem_s", 0.0),
+            "render_s": timings.get("render_s", 0.0), "write_s": t3 - t2}
 
 
 def warm_numba_cache() -> None:
@@ -269,6 +279,7 @@ def run_sweep(
     pending = [int(i) for i in np.flatnonzero(status != 1)]
     summary = SweepSummary(store=str(out), n_shards=len(status), samples_per_shard=cfg.samples_per_run,
                            done_before=len(status) - len(pending))
+    summary.phase_seconds["prepare"] = time.perf_counter() - t0
     cfg_dict = cfg.to_dict()
     bar = _progress_bar(len(pending) * cfg.samples_per_run, progress)
     try:
@@ -278,14 +289,17 @@ def run_sweep(
                 for shard in pending:
                     _account(summary, bar, shard_task(str(out), cfg_dict, shard))
                 summary.compute_seconds = time.perf_counter() - t_compute
+                summary.phase_seconds["compute"] = summary.compute_seconds
             else:
                 _run_distributed(str(out), cfg, pending, summary, bar, workers, remote, retries)
     finally:
         bar.close()
         if remote is not None and not pending:
             remote.close()
+    t_fin = time.perf_counter()
     record_failures(out, summary.failed)
     finalize_store(out)
+    summary.phase_seconds["finalize"] = time.perf_counter() - t_fin
     summary.seconds = time.perf_counter() - t0
     return summary
 
@@ -295,6 +309,7 @@ def _account(summary: SweepSummary, bar: Any, result: dict[str, Any]) -> None:
     if "error" in result:
         summary.failed[result["shard"]] = result["error"]
     else:
+        summary.tasks.append(result)
         summary.completed.append(result["shard"])
         if result.get("no_fault"):
             summary.no_fault.append(result["shard"])
@@ -317,6 +332,7 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
     from distributed import Client, LocalCluster, as_completed
 
     cluster = None
+    t_start = time.perf_counter()
     if remote is not None:
         client = remote
     else:
@@ -327,8 +343,10 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
         warm_errors: list[BaseException] = []
 
         def warm() -> None:
+            t_warm = time.perf_counter()
             try:
                 warm_numba_cache()
+                summary.phase_seconds["warm"] = time.perf_counter() - t_warm
             except BaseException as exc:  # re-raised in the driver below
                 warm_errors.append(exc)
 
@@ -348,6 +366,7 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
             client.close()
             cluster.close()
             raise warm_errors[0]
+    summary.phase_seconds["start"] = time.perf_counter() - t_start
     try:
         t_compute = time.perf_counter()
         # longest runs first (LPT): fewer workers idle at the end of a sweep of unequal runs
@@ -364,10 +383,13 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
                 exc = fut.exception()
                 summary.failed[shard_of[fut.key]] = f"{type(exc).__name__}: {exc}"
         summary.compute_seconds = time.perf_counter() - t_compute
+        summary.phase_seconds["compute"] = summary.compute_seconds
     finally:
+        t_close = time.perf_counter()
         client.close()
         if cluster is not None:
             cluster.close()
+        summary.phase_seconds["close"] = time.perf_counter() - t_close
 
 
 def _progress_bar(total: int, enabled: bool) -> Any:

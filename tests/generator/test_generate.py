@@ -296,10 +296,10 @@ def test_unstable_run_recorded_and_sweep_goes_on(tmp_path, monkeypatch, capsys):
 
     real = sweep.run_shard
 
-    def flaky(cfg, run, progress=None):
+    def flaky(cfg, run, progress=None, **kw):
         if run == 1:
             raise SimulationError("kinetic energy blew up at step 123")
-        return real(cfg, run, progress)
+        return real(cfg, run, progress, **kw)
 
     monkeypatch.setattr(sweep, "run_shard", flaky)
     out = tmp_path / "f.zarr"
