@@ -57,7 +57,7 @@ def main(argv=None) -> int:
                                           for k in ("ids", "xy", "radius", "layer", "deposited")},
                             throw_m=np.array([s.throw_m for s in snaps]))
     if args.figure:
-        from demseis.dem.plot import plot_snapshots
+        from demseis.plotting import plot_snapshots
         plot_snapshots(snaps, args.figure, title=f"demseis DEM: {args.dip:.0f} deg normal fault, "
                        f"{asm.n} elements, 48 layers")
     print(json.dumps(res))

@@ -53,8 +53,8 @@ def main() -> None:
         mask_thickness_cells,
         strain_history,
     )
+    from demseis.types import Grid
     from demseis.seismic import (
-        Grid,
         PropertyModel,
         draw_layer_properties,
         element_properties,

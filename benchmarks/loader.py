@@ -10,7 +10,7 @@ measured side by side in one run. Same as ``demseis bench loader``.
 
 import sys
 
-from demseis.generator.cli import main
+from demseis.cli import main
 
 if __name__ == "__main__":
     raise SystemExit(main(["bench", "loader", *sys.argv[1:]]))

@@ -12,8 +12,8 @@ import time
 
 import numpy as np
 
-from demseis.labels.baseline import dip_fault_probability, semblance_fault_probability
-from demseis.labels.scoring import score
+from demseis.evaluation.baseline import dip_fault_probability, semblance_fault_probability
+from demseis.evaluation.scoring import score
 
 
 def _median_time(fn, repeats: int) -> float:

@@ -1,5 +1,5 @@
 """``python -m demseis`` is the same as the ``demseis`` console script."""
 
-from demseis.generator.cli import main
+from demseis.cli import main
 
 raise SystemExit(main())

@@ -143,7 +143,7 @@ def train(args: argparse.Namespace) -> tuple[object, dict]:
 def run_score(pred: str, store: str, indices: str, tolerance: float, by: str,
               bins: int) -> int:
     """``demseis score`` on predictions of the test samples (printed as a command line)."""
-    from demseis.generator.cli import main
+    from demseis.cli import main
 
     argv = ["score", pred, store, "--indices", indices, "--tolerance", f"{tolerance:g}",
             "--by", by, "--bins", str(bins)]
@@ -171,7 +171,7 @@ def main(argv: list[str] | None = None) -> int:
     import torch
 
     from demseis.datasets import FaultSegDataset
-    from demseis.labels.baseline import baseline_fault_probability
+    from demseis.evaluation.baseline import baseline_fault_probability
 
     os.makedirs(args.out_dir, exist_ok=True)
     model, _ = train(args)

@@ -8,7 +8,7 @@ import sys
 CODE = """
 import sys
 import demseis, demseis.dem, demseis.seismic, demseis.labels, demseis.datasets, demseis.generator
-import demseis.generator.cli
+import demseis.cli, demseis.evaluation, demseis.types, demseis.testing
 heavy = sorted(m for m in ("torch", "dask", "distributed", "matplotlib") if m in sys.modules)
 print(",".join(heavy))
 """
@@ -20,7 +20,7 @@ def test_import_is_light():
 
 
 def test_help_is_fast_and_light():
-    code = "import sys; from demseis.generator.cli import build_parser; build_parser(); " \
+    code = "import sys; from demseis.cli import build_parser; build_parser(); " \
            "print(','.join(m for m in ('torch','dask','matplotlib') if m in sys.modules))"
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert proc.stdout.strip() == ""

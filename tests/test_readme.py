@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from demseis.generator.cli import build_parser, main
+from demseis.cli import build_parser, main
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 

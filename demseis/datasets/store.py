@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from demseis import __version__
-from demseis.dem.types import Snapshot
+from demseis.types import Snapshot
 from demseis.errors import InputError, StoreError
 
 SCHEMA_VERSION = 1

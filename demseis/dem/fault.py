@@ -23,7 +23,8 @@ import numpy as np
 from demseis.dem import detmath
 from demseis.dem.assembly import Assembly
 from demseis.dem.engine import Engine, time_step, validate_material
-from demseis.dem.types import Material, NormalFault, Snapshot
+from demseis.dem.types import Material, NormalFault
+from demseis.types import Snapshot
 from demseis.errors import InputError
 
 

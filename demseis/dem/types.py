@@ -1,4 +1,6 @@
-"""Plain data types shared by the DEM and everything downstream of it.
+"""Parameters of the DEM: the element :class:`Material` and the basement :class:`NormalFault`.
+
+The particle :class:`demseis.types.Snapshot` the DEM returns lives in :mod:`demseis.types`.
 
 Coordinates: x to the right, y up, metres. The model box is ``0 <= x <= width_m`` and
 ``0 <= y <= height_m`` before faulting (y = 0 is the top of the basement).
@@ -7,8 +9,6 @@ Coordinates: x to the right, y up, metres. The model box is ``0 <= x <= width_m`
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import numpy as np
 
 
 @dataclass(frozen=True)
@@ -64,33 +64,3 @@ class NormalFault:
     throw_m: float = 450.0
     dip_direction: str = "right"
     speed_m_s: float = 5.0
-
-
-@dataclass(frozen=True)
-class Snapshot:
-    """State of the assembly at one increment.
-
-    Attributes
-    ----------
-    index : snapshot number (0 = the undeformed reference).
-    step : integrator step at which it was taken.
-    throw_m : basement throw applied so far (m).
-    ids : (n,) int64 element ids, stable across snapshots of one run.
-    xy : (n, 2) float64 element centres (m).
-    radius : (n,) float64 radii (m).
-    layer : (n,) int16 layer index (0 = deepest pre-kinematic layer; growth layers follow).
-    deposited : (n,) bool, True for elements added by syn-tectonic sedimentation.
-    """
-
-    index: int
-    step: int
-    throw_m: float
-    ids: np.ndarray
-    xy: np.ndarray
-    radius: np.ndarray
-    layer: np.ndarray
-    deposited: np.ndarray
-
-    @property
-    def n(self) -> int:
-        return int(self.ids.shape[0])

@@ -13,10 +13,11 @@ from typing import Any
 
 import numpy as np
 
-from demseis.dem.types import Material, NormalFault, Snapshot
+from demseis.dem.types import Material, NormalFault
+from demseis.types import Snapshot
 from demseis.generator.config import _MATERIAL_FIELDS, Config, _property_params, all_params
 from demseis.generator.sampling import RunSpec, plan_run, rng_at, seed_sequence
-from demseis.seismic.grid import Grid
+from demseis.types import Grid
 
 #: integer codes of string parameters in the store (``params/<name>`` holds the index)
 PARAM_CODES: dict[str, tuple[str, ...]] = {

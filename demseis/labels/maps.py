@@ -1,6 +1,6 @@
 """Label maps on the seismic grid: fault mask, damage-zone classes, strain target, layer ids.
 
-Pipeline (per snapshot), all on the :class:`demseis.seismic.grid.Grid` the seismic uses, so the
+Pipeline (per snapshot), all on the :class:`demseis.types.Grid` the seismic uses, so the
 labels are pixel-aligned with it:
 
 1. per-element strain -> grid with :func:`demseis.seismic.raster.rasterise` (mean over the disks
@@ -41,7 +41,7 @@ def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = 
     strain_per_element : (n,) gamma_max aligned with the snapshot's elements (NaN = unknown,
         ignored), or the snapshot's :class:`~demseis.labels.strain.StrainState`, in which case
         ``config.strain_measure`` picks total or cumulative.
-    grid : :class:`demseis.seismic.grid.Grid`, row 0 at the top.
+    grid : :class:`demseis.types.Grid`, row 0 at the top.
     config : :class:`LabelConfig` (defaults if None).
 
     Returns
@@ -99,7 +99,7 @@ def rasterise_strain(xy: np.ndarray, radius: np.ndarray, values: np.ndarray,
         element reaches the cell (outside the rock).
     owner : (nz, nx) int64 power-diagram element of each cell (-1 outside the rock).
     """
-    from demseis.seismic.raster import rasterise
+    from demseis.seismic import rasterise
 
     xy = np.asarray(xy, dtype=np.float64)
     radius = np.asarray(radius, dtype=np.float64)

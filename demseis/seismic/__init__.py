@@ -20,7 +20,6 @@ from demseis.seismic.forward import (
     synthetic_sections,
     time_axis,
 )
-from demseis.seismic.grid import Grid
 from demseis.seismic.noise import add_noise, rms, snr_db
 from demseis.seismic.properties import (
     LayerProperties,
@@ -34,7 +33,7 @@ from demseis.seismic.raster import rasterise
 from demseis.seismic.wavelet import ricker
 
 __all__ = [
-    "Grid", "rasterise", "ricker", "reflectivity", "impedance", "convolve", "PropertyModel",
+    "rasterise", "ricker", "reflectivity", "impedance", "convolve", "PropertyModel",
     "LayerProperties", "draw_layer_properties", "element_properties", "property_grids", "smooth",
     "synthetic_sections", "interface_times", "time_axis", "depth_to_time", "add_noise", "rms",
     "snr_db",

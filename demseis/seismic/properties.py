@@ -28,7 +28,7 @@ import numpy as np
 
 from demseis.errors import ConfigError, InputError
 from demseis.seismic import _kernels
-from demseis.seismic.grid import Grid
+from demseis.types import Grid
 from demseis.seismic.raster import rasterise
 
 

@@ -1,4 +1,4 @@
-"""Rasterisation of per-element values onto a :class:`~demseis.seismic.grid.Grid`."""
+"""Rasterisation of per-element values onto a :class:`~demseis.types.Grid`."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 
 from demseis.errors import InputError
 from demseis.seismic._kernels import divide_by_count, rasterise_sum
-from demseis.seismic.grid import Grid
+from demseis.types import Grid
 
 
 def rasterise(

@@ -1,4 +1,5 @@
-"""Export one stored section as SEG-Y (``demseis export-segy``).
+"""Write a 2-D section as SEG-Y (used by ``demseis export-segy`` through
+:func:`demseis.datasets.read.export_segy`, which reads the store).
 
 Layout of the file: one trace per grid column (trace j at x = x0 + (j + 0.5) cell), samples
 down the rows, IEEE float32 (format 5), SEG-Y rev 1 headers written by segyio.
@@ -17,65 +18,12 @@ which. Coordinates: ``CDP_X``/``SourceX``/``GroupX`` hold the column x in metres
 
 from __future__ import annotations
 
-import math
 import os
 from pathlib import Path
 
 import numpy as np
 
-from demseis.errors import InputError, StoreError
-
-
-def _open_store(path: Path):
-    """Open a demseis store read-only (the datasets helper's reader when present)."""
-    try:
-        from demseis.datasets import open_store  # type: ignore[attr-defined]
-    except ImportError:
-        open_store = None
-    if open_store is not None:
-        return open_store(path)
-    import zarr
-
-    if not path.exists():
-        raise StoreError(f"store {str(path)!r} does not exist")
-    if not path.is_dir():
-        raise StoreError(f"store {str(path)!r} is a file, not a Zarr store directory")
-    try:
-        group = zarr.open_group(path, mode="r")
-    except Exception as exc:
-        raise StoreError(f"{str(path)!r} is not a readable Zarr group: {exc}") from exc
-    info = group.attrs.get("demseis")
-    if not isinstance(info, dict) or "schema_version" not in info:
-        raise StoreError(f"{str(path)!r} is a Zarr store but was not written by demseis")
-    if info["schema_version"] != 1:
-        raise StoreError(f"store {str(path)!r} has schema version {info['schema_version']!r}; "
-                         "this demseis reads schema version 1")
-    return group
-
-
-def read_section(store: str | Path, sample: int) -> tuple[np.ndarray, dict]:
-    """Section ``sample`` (nz, nx) float32 and the store's ``grid`` attribute."""
-    path = Path(store)
-    group = _open_store(path)
-    if "seismic" not in group:
-        raise StoreError(f"store {str(path)!r} has no 'seismic' array")
-    grid = group.attrs.get("grid")
-    need = ("x0_m", "top_m", "cell_m", "nz", "nx")
-    if not isinstance(grid, dict) or any(k not in grid for k in need):
-        raise StoreError(f"store {str(path)!r} lacks the root attribute 'grid' with keys {need}")
-    arr = group["seismic"]
-    n = arr.shape[0]
-    if isinstance(sample, bool) or not isinstance(sample, (int, np.integer)) \
-            or not 0 <= sample < n:
-        raise InputError(f"--sample {sample!r} is out of range: the store has samples 0..{n - 1}")
-    section = np.asarray(arr[int(sample)], dtype=np.float32)
-    if section.shape != (int(grid["nz"]), int(grid["nx"])) and grid.get("domain") != "time":
-        raise StoreError(f"seismic sample shape {section.shape} does not match the store grid "
-                         f"(nz={grid['nz']}, nx={grid['nx']})")
-    if not np.all(np.isfinite(section)):
-        raise StoreError(f"sample {sample} of {str(path)!r} was never written (its shard is "
-                         "missing or unfinished): it holds NaN")
-    return section, dict(grid)
+from demseis.errors import InputError
 
 
 def write_segy(section: np.ndarray, out: str | Path, *, x0_m: float, cell_m: float,
@@ -159,14 +107,3 @@ def write_segy(section: np.ndarray, out: str | Path, *, x0_m: float, cell_m: flo
             tmp.unlink()
     return out
 
-
-def export_segy(store: str | Path, sample: int, out: str | Path, overwrite: bool = False) -> Path:
-    """Write section ``sample`` of a demseis store to the SEG-Y file ``out``."""
-    section, grid = read_section(store, sample)
-    domain = grid.get("domain", "depth")
-    dt_s = grid.get("dt_s")
-    if domain == "time" and (dt_s is None or not math.isfinite(float(dt_s))):
-        raise StoreError("store grid says domain 'time' but has no valid 'dt_s'")
-    return write_segy(section, out, x0_m=float(grid["x0_m"]), cell_m=float(grid["cell_m"]),
-                      top_m=float(grid["top_m"]), domain=domain, dt_s=dt_s, overwrite=overwrite,
-                      note=f"store {Path(store).name} sample {sample}")

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from demseis.dem.types import Snapshot
+from demseis.types import Snapshot
 from demseis.datasets import create_store, write_shard
 
 PARAMS = {"run_id": "int32", "snapshot": "int16", "freq_hz": "float32", "snr_db": "float32",

@@ -10,7 +10,7 @@ import pytest
 import zarr
 
 from demseis.datasets import open_store, record_failures, validate_store
-from demseis.generator.cli import main
+from demseis.cli import main
 from tests.datasets._helpers import make_store
 
 

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from demseis.errors import ConfigError
-from demseis.generator.cli import main
+from demseis.cli import main
 from demseis.generator.config import PRESETS, load_config, parse_config
 from demseis.generator.params import DistSpec, Fixed, GridSpec
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import zarr
 
-from demseis.generator.cli import main
+from demseis.cli import main
 
 
 def _tree_bytes(path: Path) -> dict[str, bytes]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from demseis.dem.types import Snapshot
+from demseis.types import Snapshot
 from demseis.errors import ConfigError, InputError
 from demseis.labels import LabelConfig, strain_history
 
@@ -112,7 +112,7 @@ def test_history_errors(pack_small):
 def test_history_with_lost_elements_matches_direct_fit(pack_small):
     """Elements missing from a later snapshot: the rest is fitted against the common set."""
     from demseis.labels import element_strain
-    from demseis.labels.synthetic import kinematic_fault
+    from demseis.testing import kinematic_fault
 
     xy, r = pack_small
     n = xy.shape[0]

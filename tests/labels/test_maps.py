@@ -7,7 +7,7 @@ import pytest
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from demseis.dem.types import Snapshot
+from demseis.types import Snapshot
 from demseis.errors import ConfigError, InputError
 from demseis.labels import (
     LabelConfig,
@@ -19,8 +19,8 @@ from demseis.labels import (
     thin_and_dilate,
 )
 from demseis.labels.maps import skeletonize
-from demseis.labels.synthetic import fault_signed_distance, kinematic_fault
-from demseis.seismic.grid import Grid
+from demseis.testing import fault_signed_distance, kinematic_fault
+from demseis.types import Grid
 from demseis.seismic.raster import rasterise
 
 W, H, XF = 2000.0, 1000.0, 1200.0

@@ -7,9 +7,10 @@ import pytest
 import scipy.ndimage as ndi
 
 from demseis.errors import ConfigError, InputError
-from demseis.seismic import (Grid, PropertyModel, draw_layer_properties, element_properties,
+from demseis.seismic import (PropertyModel, draw_layer_properties, element_properties,
                              property_grids)
-from demseis.seismic.demo import faulted_sequence
+from demseis.types import Grid
+from demseis.testing import faulted_sequence
 
 
 def test_defaults_validate_and_lists_become_tuples():

@@ -6,7 +6,8 @@ import scipy.ndimage as ndi
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from demseis.seismic import Grid, rasterise
+from demseis.seismic import rasterise
+from demseis.types import Grid
 from demseis.seismic import _kernels
 from demseis.seismic.properties import (PropertyModel, gaussian_weights, nearest_element_index,
                                         smooth)

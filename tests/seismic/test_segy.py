@@ -5,8 +5,9 @@ import pytest
 import segyio
 
 from demseis.errors import InputError, StoreError
-from demseis.generator.cli import main
-from demseis.seismic.segy import export_segy, write_segy
+from demseis.cli import main
+from demseis.datasets.read import export_segy
+from demseis.seismic.segy import write_segy
 
 from .conftest import make_store
 

@@ -1,8 +1,13 @@
-"""The ``demseis`` command line.
+"""The ``demseis`` command line: one module per command group, each thin over the library.
 
-Each subpackage contributes its subcommands through ``demseis.<pkg>._cli.register(sub, bench)``,
-where ``sub`` is the top-level subparsers object and ``bench`` the subparsers of
-``demseis bench``. A handler is ``func(args) -> int`` set with ``parser.set_defaults(func=...)``.
+- :mod:`demseis.cli.generate`: ``generate``, ``render``
+- :mod:`demseis.cli.store`: ``info``, ``validate``, ``export-segy``
+- :mod:`demseis.cli.plots`: ``plot``, ``preview``
+- :mod:`demseis.cli.evaluate`: ``score``, ``baseline``
+- :mod:`demseis.cli.bench`: ``bench dem|seismic|labels|loader``
+
+Each module has ``register(sub, bench)``, where ``sub`` is the top-level subparsers object and
+``bench`` the subparsers of ``demseis bench``. A handler is ``func(args) -> int`` set with ``parser.set_defaults(func=...)``.
 Handlers import heavy modules (dask, torch, matplotlib) inside themselves, so ``--help`` is fast.
 
 Any :class:`demseis.errors.DemseisError` becomes one line on stderr and its exit code (2 for
@@ -21,11 +26,8 @@ from demseis.errors import DemseisError
 
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser with every subpackage's subcommands registered."""
-    from demseis.datasets import _cli as datasets_cli
-    from demseis.dem import _cli as dem_cli
-    from demseis.generator import _commands as generator_cli
-    from demseis.labels import _cli as labels_cli
-    from demseis.seismic import _cli as seismic_cli
+    from demseis.cli import bench as bench_cli
+    from demseis.cli import evaluate, generate, plots, store
 
     parser = argparse.ArgumentParser(
         prog="demseis",
@@ -36,9 +38,20 @@ def build_parser() -> argparse.ArgumentParser:
     bench_parser = sub.add_parser("bench", help="speed benchmarks printing one JSON line")
     bench = bench_parser.add_subparsers(dest="bench_target", metavar="TARGET")
     bench_parser.set_defaults(func=lambda args: _missing_sub(bench_parser))
-    for module in (generator_cli, dem_cli, seismic_cli, labels_cli, datasets_cli):
+    for module in (generate, store, plots, evaluate, bench_cli):
         module.register(sub, bench)
     return parser
+
+
+def nonneg_int(text: str) -> int:
+    """argparse type: an integer >= 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
+    return value
 
 
 def _missing_sub(parser: argparse.ArgumentParser) -> int:

@@ -1,7 +1,4 @@
-"""``demseis score`` and ``demseis baseline``: benchmark predictions against a store.
-
-The lead wires these in with ``add_scoring_commands(sub)`` from :mod:`demseis.labels._cli`.
-"""
+"""``demseis score`` and ``demseis baseline``: benchmark predictions against a store."""
 
 from __future__ import annotations
 
@@ -17,8 +14,8 @@ import numpy as np
 from demseis.errors import InputError
 
 
-def add_scoring_commands(sub: argparse._SubParsersAction) -> None:
-    """Add the ``score`` and ``baseline`` subcommands to the top-level subparsers ``sub``."""
+def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+    """Add ``score`` and ``baseline``."""
     p = sub.add_parser(
         "score",
         help="precision / recall / F1 / IoU of fault predictions against a store's labels",
@@ -108,8 +105,8 @@ def _json_safe(v: Any) -> Any:
 
 
 def _score_command(args: argparse.Namespace) -> int:
-    from demseis.labels.scoring import (
-        _open_truth_store,
+    from demseis.datasets.read import open_truth
+    from demseis.evaluation.scoring import (
         format_table,
         group_rows,
         load_predictions,
@@ -118,7 +115,7 @@ def _score_command(args: argparse.Namespace) -> int:
     )
 
     by = [s.strip() for s in args.by.split(",") if s.strip()]
-    store = _open_truth_store(args.truth_store)
+    store = open_truth(args.truth_store)
     for name in by:
         if name not in store.params:
             raise InputError(f"--by {name!r}: the store has per-sample parameters "
@@ -179,13 +176,12 @@ def _baseline_command(args: argparse.Namespace) -> int:
     import zarr
     from tqdm import tqdm
 
-    from demseis.errors import StoreError
-    from demseis.labels.baseline import (
+    from demseis.datasets.read import open_sections
+    from demseis.evaluation.baseline import (
         SemblanceBaseline,
         dip_fault_probability,
         semblance_fault_probability,
     )
-    from demseis.labels.scoring import _open_group, _valid_samples
 
     cfg = SemblanceBaseline(half_traces=args.half_traces, half_samples=args.half_samples,
                             max_slope=args.max_slope)
@@ -199,15 +195,7 @@ def _baseline_command(args: argparse.Namespace) -> int:
 
         def detect(sec: np.ndarray) -> np.ndarray:
             return semblance_fault_probability(sec, cfg)
-    root = _open_group(args.store)
-    if args.input not in set(root.array_keys()):
-        raise StoreError(f"store {args.store!r} has no {args.input!r} array; it holds "
-                         f"{sorted(root.array_keys())}")
-    seis = root[args.input]
-    if seis.ndim != 3 or 0 in seis.shape:
-        raise StoreError(f"store {args.store!r}: {args.input!r} must be a non-empty (N, H, W) "
-                         f"array, got shape {seis.shape}")
-    valid = _valid_samples(root, int(seis.shape[0]), args.store)
+    seis, valid = open_sections(args.store, args.input)
     if os.path.exists(args.out) and not args.overwrite:
         raise InputError(f"--out {args.out!r} exists; pass --overwrite to replace it")
     n, h, w = (int(v) for v in seis.shape)

@@ -1,4 +1,4 @@
-"""Figures of the seismic stage (``python -m demseis.seismic.figures --out docs/figures``).
+"""Figures of the seismic stage (``python scripts/seismic_figures.py --out docs/figures``).
 
 - ``seismic_frequency_sequence.png``: like the paper's Figure 6, sections at 20/40/60 Hz
   (rows) across the deformation sequence (columns);
@@ -6,9 +6,9 @@
   the 40 Hz section of the last snapshot (like Figures 4-5);
 - ``seismic_tuning.png``: Ricker wavelets and the wedge tuning curves with lambda/4 marked.
 
-Snapshots come from an ``.npz`` written from DEM snapshots (keys ``n`` and ``s{k}_ids``,
-``s{k}_xy``, ``s{k}_radius``, ``s{k}_layer``, ``s{k}_throw_m``) or, without one, from the
-kinematic toy sequence of :mod:`demseis.seismic.demo` (the figure title says which).
+Snapshots come from an ``.npz`` written from DEM snapshots with
+:func:`demseis.types.save_snapshots` or, without one, from the kinematic toy sequence of
+:func:`demseis.testing.faulted_sequence` (the figure title says which).
 matplotlib is imported inside the functions.
 """
 
@@ -16,12 +16,11 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 
 from demseis.seismic.forward import impedance, reflectivity, synthetic_sections
-from demseis.seismic.grid import Grid
+from demseis.types import Grid, load_snapshots
 from demseis.seismic.properties import (PropertyModel, draw_layer_properties, element_properties,
                                         fill_background, property_grids)
 from demseis.seismic.raster import rasterise
@@ -31,14 +30,6 @@ def _extent_km(grid: Grid) -> list[float]:
     """imshow extent (left, right, bottom, top) in km: x across, depth below the grid top."""
     return [grid.x0_m / 1e3, (grid.x0_m + grid.nx * grid.cell_m) / 1e3,
             grid.nz * grid.cell_m / 1e3, 0.0]
-
-
-def load_snapshots(npz: str | Path) -> list[SimpleNamespace]:
-    """Snapshots saved in an ``.npz`` (see the module docstring)."""
-    d = np.load(npz)
-    return [SimpleNamespace(index=k, ids=d[f"s{k}_ids"], xy=d[f"s{k}_xy"],
-                            radius=d[f"s{k}_radius"], layer=d[f"s{k}_layer"],
-                            throw_m=float(d[f"s{k}_throw_m"])) for k in range(int(d["n"]))]
 
 
 def render_sequence(snaps, grid: Grid, freqs_hz, model: PropertyModel, seed: int = 0):
@@ -184,7 +175,7 @@ def main(argv=None) -> int:
         snaps = load_snapshots(a.npz)
         source = "DEM (branch dem, simulate)"
     else:
-        from demseis.seismic.demo import faulted_sequence
+        from demseis.testing import faulted_sequence
 
         snaps = faulted_sequence(a.width_m, a.height_m, dip_deg=60.0,
                                  rng=np.random.default_rng(0))

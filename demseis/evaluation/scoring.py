@@ -49,13 +49,16 @@ rule as the distance transform at every threshold at once.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
 from demseis.errors import InputError
+
+if TYPE_CHECKING:
+    from demseis.datasets.read import TruthStore
 
 __all__ = [
     "SampleCounts",
@@ -465,106 +468,6 @@ def score(pred: ArrayLike, truth: ArrayLike, threshold: float = 0.5, tolerance_p
 
 #: a parameter with at most this many distinct values is grouped by value, otherwise binned
 MAX_CATEGORIES = 12
-
-
-@dataclass(frozen=True)
-class TruthStore:
-    """The parts of a demseis store that scoring reads.
-
-    Attributes
-    ----------
-    path : str
-    fault : zarr.Array, shape (N, H, W), uint8
-    valid : ndarray, shape (N,), bool
-        Samples of completed shards.
-    params : dict[str, ndarray]
-        Per-sample parameters from ``params/``, each shape (N,).
-    """
-
-    path: str
-    fault: Any
-    valid: NDArray[np.bool_]
-    params: dict[str, NDArray[Any]]
-
-    @property
-    def shape(self) -> tuple[int, int, int]:
-        """(N, H, W) of the label array."""
-        return tuple(int(s) for s in self.fault.shape)  # type: ignore[return-value]
-
-
-def _open_group(path: str) -> Any:
-    """The store's root group, opened read-only and checked to be a demseis store.
-
-    Uses :func:`demseis.datasets.open_store` when that is available (it also checks the schema
-    version); otherwise a minimal check of the ``demseis`` root attribute.
-    """
-    import os
-
-    import zarr
-
-    from demseis.errors import StoreError
-
-    try:
-        from demseis.datasets import open_store
-    except ImportError:
-        open_store = None
-    if open_store is not None:
-        return open_store(path, "r")
-    if not os.path.exists(path):
-        raise StoreError(f"truth store {path!r} does not exist")
-    try:
-        root = zarr.open_group(path, mode="r")
-    except Exception as exc:  # zarr raises several types for a non-group path
-        raise StoreError(f"{path!r} is not a Zarr group ({type(exc).__name__}: {exc})") from exc
-    if "demseis" not in root.attrs:
-        raise StoreError(f"{path!r} is not a demseis store (no 'demseis' root attribute)")
-    return root
-
-
-def _valid_samples(root: Any, n: int, path: str) -> NDArray[np.bool_]:
-    """(n,) bool: samples of completed shards (``shard_done == 1``); StoreError if none."""
-    from demseis.errors import StoreError
-
-    valid = np.ones(n, bool)
-    if "shard_done" in set(root.array_keys()):
-        done = np.asarray(root["shard_done"][:]) == 1
-        if done.size == 0 or n % done.size:
-            raise StoreError(f"store {path!r}: {n} samples do not split into "
-                             f"{done.size} shards")
-        valid = np.repeat(done, n // done.size)
-    if not valid.any():
-        raise StoreError(f"store {path!r} is empty: no shard is complete "
-                         "(shard_done is 0 everywhere); finish the sweep first")
-    return valid
-
-
-def _open_truth_store(path: str) -> TruthStore:
-    """Open a demseis store read-only for scoring; :class:`StoreError` naming what is wrong.
-
-    Checks the ``fault`` label array, ``params/`` and ``shard_done`` (only samples of
-    completed shards are scored).
-    """
-    from demseis.errors import StoreError
-
-    root = _open_group(path)
-    names = set(root.array_keys())
-    if "fault" not in names:
-        raise StoreError(f"store {path!r} has no 'fault' label array; it holds "
-                         f"{sorted(names) or 'no arrays'}")
-    fault = root["fault"]
-    if fault.ndim != 3:
-        raise StoreError(f"store {path!r}: 'fault' must have shape (N, H, W), got {fault.shape}")
-    n = int(fault.shape[0])
-    if n == 0:
-        raise StoreError(f"store {path!r} is empty: 'fault' holds 0 samples")
-    valid = _valid_samples(root, n, path)
-    params: dict[str, NDArray[Any]] = {}
-    if "params" in set(root.group_keys()):
-        for key in root["params"].array_keys():
-            arr = np.asarray(root["params"][key][:])
-            if arr.shape == (n,):
-                params[key] = arr
-    return TruthStore(path=str(path), fault=fault, valid=valid, params=params)
 
 
 def load_predictions(path: str) -> Any:

@@ -8,36 +8,11 @@ import numpy as np
 import pytest
 
 from demseis.errors import InputError
-from demseis.generator.cli import main
-from demseis.labels._scoring_kernels import dip_scan_semblance
-from demseis.labels.baseline import SemblanceBaseline, semblance_fault_probability
-from demseis.labels.scoring import score
-
-
-def ricker(f_hz, dt_s, n):
-    t = (np.arange(n) - n // 2) * dt_s
-    a = (np.pi * f_hz * t) ** 2
-    return (1 - 2 * a) * np.exp(-a)
-
-
-def faulted_section(nz=96, nx=96, throw=6.0, dip_deg=70.0, noise=0.0, seed=0, fault=True,
-                    regional=0.1):
-    """Sparse random reflectivity convolved with a 25 Hz Ricker (4 ms samples), gently dipping
-    (``regional`` samples per trace, sub-sample interpolation), cut by a planar normal fault
-    whose hanging wall (right) is shifted down by ``throw`` samples. Truth: pixels within 1 px
-    of the fault trace."""
-    rng = np.random.default_rng(seed)
-    refl = rng.normal(0, 1, 2 * nz) * (rng.random(2 * nz) < 0.3)
-    trace = np.convolve(refl, ricker(25.0, 0.004, 41), mode="same")
-    z = np.arange(nz)[:, None]
-    x = np.arange(nx)[None, :]
-    fx = nx / 2 + (z - nz / 2) / np.tan(np.radians(dip_deg))
-    shift = regional * x + (throw if fault else 0.0) * (x > fx)
-    s = np.interp(z + nz // 2 - shift, np.arange(2 * nz), trace)
-    if noise:
-        s = s + rng.normal(0, noise * s.std(), s.shape)
-    truth = (np.abs(x - fx) <= 1.0) & fault
-    return s.astype(np.float32), truth.astype(np.uint8)
+from demseis.cli import main
+from demseis.evaluation._kernels import dip_scan_semblance
+from demseis.evaluation.baseline import SemblanceBaseline, semblance_fault_probability
+from demseis.evaluation.scoring import score
+from demseis.testing import faulted_section, ricker_pulse as ricker
 
 
 def _reference_semblance(u, slopes, ht, hs, eps):
@@ -117,7 +92,7 @@ def test_stack_and_errors():
 
 
 def test_cli_baseline_then_score(tmp_path, capsys):
-    from tests.labels.test_scoring_store import make_store
+    from tests.evaluation.test_scoring_store import make_store
 
     secs, truths = zip(*(faulted_section(nz=32, nx=32, seed=s) for s in range(6)))
     seismic = np.stack(secs)
@@ -134,7 +109,7 @@ def test_cli_baseline_then_score(tmp_path, capsys):
     assert np.all(pred[4:] == 0)  # incomplete shard left empty
     assert np.allclose(pred[0], semblance_fault_probability(seismic[0]))
     assert main(["baseline", str(tmp_path / "s.zarr"), "--out", str(out)]) == 2  # exists
-    from demseis.labels.baseline import dip_fault_probability
+    from demseis.evaluation.baseline import dip_fault_probability
 
     dip = tmp_path / "dip.npy"
     assert main(["baseline", str(tmp_path / "s.zarr"), "--out", str(dip)]) == 0  # default dip
@@ -146,7 +121,7 @@ def test_cli_baseline_then_score(tmp_path, capsys):
 
 
 def test_cli_baseline_needs_no_labels_but_seismic(tmp_path, capsys):
-    from tests.labels.test_scoring_store import make_store
+    from tests.evaluation.test_scoring_store import make_store
 
     make_store(tmp_path / "s.zarr", n_shards=2, per_shard=2, h=16, w=16, with_fault=False)
     assert main(["baseline", str(tmp_path / "s.zarr"), "--out", str(tmp_path / "p.zarr")]) == 0
@@ -166,7 +141,7 @@ def zarr_shape(path):
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_dip_attribute_beats_chance_and_ignores_gentle_dip(seed):
-    from demseis.labels.baseline import dip_fault_probability
+    from demseis.evaluation.baseline import dip_fault_probability
 
     sec, truth = faulted_section(seed=seed)
     prob = dip_fault_probability(sec)
@@ -178,7 +153,7 @@ def test_dip_attribute_beats_chance_and_ignores_gentle_dip(seed):
 
 
 def test_dip_attribute_reads_reflector_dip():
-    from demseis.labels.baseline import dip_fault_probability
+    from demseis.evaluation.baseline import dip_fault_probability
 
     trace = np.convolve(np.random.default_rng(2).normal(size=200), ricker(25, 0.004, 21), "same")
     z = np.arange(80)[:, None]

@@ -13,7 +13,7 @@ from sklearn.metrics import (
 )
 
 from demseis.errors import InputError
-from demseis.labels.scoring import count_samples, default_thresholds, score
+from demseis.evaluation.scoring import count_samples, default_thresholds, score
 
 
 def _sk(truth, pred_bin, zd=0.0):

@@ -10,8 +10,9 @@ import pytest
 import zarr
 
 from demseis.errors import InputError, StoreError
-from demseis.generator.cli import main
-from demseis.labels.scoring import _open_truth_store, group_rows, score, score_store_counts
+from demseis.cli import main
+from demseis.datasets.read import open_truth
+from demseis.evaluation.scoring import group_rows, score, score_store_counts
 
 
 def make_store(path, n_shards=3, per_shard=4, h=24, w=20, seed=0, done=None, with_fault=True,
@@ -44,7 +45,7 @@ def make_store(path, n_shards=3, per_shard=4, h=24, w=20, seed=0, done=None, wit
 
 def test_store_counts_and_grouping(tmp_path):
     fault = make_store(tmp_path / "s.zarr")
-    store = _open_truth_store(str(tmp_path / "s.zarr"))
+    store = open_truth(str(tmp_path / "s.zarr"))
     rng = np.random.default_rng(3)
     pred = np.clip(fault * 0.6 + rng.random(fault.shape) * 0.5, 0, 1).astype(np.float32)
     counts, sample = score_store_counts(pred, store, tolerance_px=1, block=5)
@@ -70,7 +71,7 @@ def test_store_counts_and_grouping(tmp_path):
 
 def test_incomplete_shards_are_skipped_and_indices(tmp_path):
     fault = make_store(tmp_path / "s.zarr", done=[1, 0, 1])
-    store = _open_truth_store(str(tmp_path / "s.zarr"))
+    store = open_truth(str(tmp_path / "s.zarr"))
     pred = fault.astype(np.float32)
     counts, sample = score_store_counts(pred, store)
     assert list(sample) == [0, 1, 2, 3, 8, 9, 10, 11]
@@ -86,15 +87,15 @@ def test_incomplete_shards_are_skipped_and_indices(tmp_path):
 def test_store_errors(tmp_path):
     make_store(tmp_path / "empty.zarr", done=[0, 0, 0])
     with pytest.raises(StoreError, match="empty"):
-        _open_truth_store(str(tmp_path / "empty.zarr"))
+        open_truth(str(tmp_path / "empty.zarr"))
     make_store(tmp_path / "nolab.zarr", with_fault=False)
     with pytest.raises(StoreError, match="'fault'"):
-        _open_truth_store(str(tmp_path / "nolab.zarr"))
+        open_truth(str(tmp_path / "nolab.zarr"))
     zarr.open_group(str(tmp_path / "foreign.zarr"), mode="w")
     with pytest.raises(StoreError, match="not a demseis store|not written by demseis"):
-        _open_truth_store(str(tmp_path / "foreign.zarr"))
+        open_truth(str(tmp_path / "foreign.zarr"))
     with pytest.raises(StoreError, match="does not exist"):
-        _open_truth_store(str(tmp_path / "missing.zarr"))
+        open_truth(str(tmp_path / "missing.zarr"))
 
 
 def test_cli_score_writes_table_csv_json(tmp_path, capsys):
@@ -154,7 +155,7 @@ def test_cli_errors_exit_2(tmp_path, capsys, case):
 
 
 def test_grouping_rule_swept_values_vs_drawn_values():
-    from demseis.labels.scoring import SampleCounts
+    from demseis.evaluation.scoring import SampleCounts
 
     n = 6
     z = np.zeros(n, np.int64)

@@ -1,4 +1,4 @@
-"""Numba kernels of the reference baseline fault detector (see :mod:`demseis.labels.baseline`)."""
+"""Numba kernels of the reference baseline fault detector (see :mod:`demseis.evaluation.baseline`)."""
 
 from __future__ import annotations
 

@@ -25,7 +25,7 @@ discontinuity of ``1 - c_ref`` or more probability 1.
 
 The default threshold :data:`DEFAULT_THRESHOLD` is the value at which a pixel is
 called a fault; it was chosen on synthetic Ricker sections (see docs/scoring.md) and users can
-tune it with the ODS threshold that :func:`demseis.labels.scoring.score` reports.
+tune it with the ODS threshold that :func:`demseis.evaluation.scoring.score` reports.
 """
 
 from __future__ import annotations
@@ -120,7 +120,7 @@ def semblance_fault_probability(section: ArrayLike,
     ndarray, float32, same shape as ``section``
         Probabilities in [0, 1]; call a pixel a fault at ``>= DEFAULT_THRESHOLD``.
     """
-    from demseis.labels._scoring_kernels import dip_scan_semblance
+    from demseis.evaluation._kernels import dip_scan_semblance
 
     cfg = config or SemblanceBaseline()
     stack, two_d = _check_section(section)

@@ -1,4 +1,4 @@
-"""`demseis bench dem`, pack files and the settled-pack cache."""
+"""`demseis bench`: dem (pack files and the settled-pack cache) and seismic print one JSON line."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from demseis.dem import settle_pack
-from demseis.dem.bench import load_pack, run_bench
+from demseis.bench import dem_benchmark, load_pack
 from demseis.errors import InputError
-from demseis.generator.cli import main
+from demseis.cli import main
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +33,7 @@ def test_pack_cache_hit_is_identical(small_pack):
 
 def test_run_bench_reports_throughput(small_pack):
     p, _ = small_pack
-    res = run_bench(p.xy, p.radius, n_steps=50)
+    res = dem_benchmark(p.xy, p.radius, n_steps=50)
     assert res["n_elements"] == p.radius.size and res["steps"] == 50
     assert res["element_steps_per_s"] == pytest.approx(p.radius.size * 50 / res["wall_s"],
                                                        rel=0.01)
@@ -66,3 +66,15 @@ def test_bad_pack_files(tmp_path, capsys):
         load_pack(g)
     assert main(["bench", "dem", "--pack", str(tmp_path / "nope.npz")]) == 2
     assert "no such file" in capsys.readouterr().err
+
+
+def test_bench_seismic_prints_one_json_line(capsys):
+    assert main(["bench", "seismic", "--nx", "64", "--nz", "36", "--repeats", "1"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert len(lines) == 1
+    rec = json.loads(lines[0])
+    assert rec["nx"] == 64 and rec["nz"] == 36
+    assert rec["ms_snapshot_1f"] > 0 and rec["ms_snapshot_3f"] > 0
+    assert set(rec["components_ms"]) >= {"rasterise", "background", "smooth_vp_rho",
+                                         "convolution_1f", "convolution_3f"}
+    assert main(["bench", "seismic", "--repeats", "0"]) == 2

@@ -1,0 +1,67 @@
+"""``demseis info``, ``demseis validate`` and ``demseis export-segy``: look at a store.
+
+- ``demseis validate PATH``: exit 0 and a one-line summary when every done shard is fine;
+  exit 1 and one line per problem otherwise; exit 2 for a missing or foreign store.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+    """Add ``info``, ``validate`` and ``export-segy``."""
+    p = sub.add_parser("info", help="summarise a store: samples, shapes, parameter ranges, config")
+    p.add_argument("path", help="store path")
+    p.set_defaults(func=cmd_info)
+
+    p = sub.add_parser(
+        "validate",
+        help="check a demseis store (done shards complete, finite, labels in range)",
+        description="Check every done shard of a demseis store: complete, no NaN, label values "
+        "in range, consistent parameters. Exit 0 when fine, 1 with the list of problems, "
+        "2 for a missing or foreign store.",
+    )
+    p.add_argument("path", metavar="PATH", help="store directory")
+    p.add_argument("--no-particles", action="store_true",
+                   help="skip reading the stored particle snapshots")
+    p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser(
+        "export-segy",
+        help="write one stored seismic section as SEG-Y",
+        description="Write seismic sample I of a demseis store as a SEG-Y file (one trace per "
+                    "grid column, IEEE float32, sample interval and trace x set).",
+    )
+    p.add_argument("store", help="path of the demseis Zarr store")
+    p.add_argument("--sample", type=int, required=True, metavar="I", help="sample index")
+    p.add_argument("--out", required=True, metavar="FILE.sgy", help="SEG-Y file to write")
+    p.add_argument("--overwrite", action="store_true", help="replace FILE.sgy if it exists")
+    p.set_defaults(func=cmd_export_segy)
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from demseis.datasets.read import store_summary
+
+    print("\n".join(store_summary(args.path)))
+    return 0
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    from demseis.datasets.validate import validate_store
+
+    report = validate_store(args.path, check_particles=not args.no_particles,
+                            progress=sys.stderr.isatty())
+    for line in report.problems:
+        print(line)
+    print(report.summary())
+    return 0 if report.ok else 1
+
+
+def cmd_export_segy(args: argparse.Namespace) -> int:
+    from demseis.datasets.read import export_segy
+
+    out = export_segy(args.store, args.sample, args.out, overwrite=args.overwrite)
+    print(f"wrote {out}", file=sys.stderr)
+    return 0

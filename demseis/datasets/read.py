@@ -1,0 +1,217 @@
+"""Read-only views of a demseis store for evaluation and export.
+
+Every read of a store outside the training loader goes through here (or through
+:mod:`demseis.datasets.store`): the samples of completed shards (:func:`done_samples`), the label
+view that scoring needs (:func:`open_truth`), the per-sample parameters (:func:`read_params`), one
+seismic section with its grid (:func:`read_section`) and its SEG-Y export (:func:`export_segy`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from demseis.datasets.store import open_store
+from demseis.errors import InputError, StoreError
+
+
+def done_samples(root: Any, n: int, path: str | Path) -> NDArray[np.bool_]:
+    """(n,) bool: the samples of completed shards (``shard_done == 1``).
+
+    Parameters
+    ----------
+    root : zarr.Group
+        The open store.
+    n : int
+        Number of samples of the array the mask is for.
+    path : str or Path
+        The store path, for messages.
+
+    Raises
+    ------
+    StoreError
+        The samples do not split into the shards, or no shard is complete.
+    """
+    valid = np.ones(n, bool)
+    if "shard_done" in set(root.array_keys()):
+        done = np.asarray(root["shard_done"][:]) == 1
+        if done.size == 0 or n % done.size:
+            raise StoreError(f"store {str(path)!r}: {n} samples do not split into "
+                             f"{done.size} shards")
+        valid = np.repeat(done, n // done.size)
+    if not valid.any():
+        raise StoreError(f"store {str(path)!r} is empty: no shard is complete "
+                         "(shard_done is 0 everywhere); finish the sweep first")
+    return valid
+
+
+def read_params(root: Any, n: int) -> dict[str, NDArray[Any]]:
+    """Per-sample parameters of an open store: name -> (n,) array from ``params/``."""
+    params: dict[str, NDArray[Any]] = {}
+    if "params" in set(root.group_keys()):
+        for key in sorted(root["params"].array_keys()):
+            arr = np.asarray(root["params"][key][:])
+            if arr.shape == (n,):
+                params[key] = arr
+    return params
+
+
+@dataclass(frozen=True)
+class TruthStore:
+    """The parts of a demseis store that scoring reads.
+
+    Attributes
+    ----------
+    path : str
+    fault : zarr.Array, shape (N, H, W), uint8
+    valid : ndarray, shape (N,), bool
+        Samples of completed shards.
+    params : dict[str, ndarray]
+        Per-sample parameters from ``params/``, each shape (N,).
+    """
+
+    path: str
+    fault: Any
+    valid: NDArray[np.bool_]
+    params: dict[str, NDArray[Any]]
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """(N, H, W) of the label array."""
+        return tuple(int(s) for s in self.fault.shape)  # type: ignore[return-value]
+
+
+def open_truth(path: str | Path, array: str = "fault") -> TruthStore:
+    """Open a demseis store read-only for scoring; :class:`StoreError` naming what is wrong.
+
+    Checks the label array ``array`` (N, H, W), ``params/`` and ``shard_done`` (only samples of
+    completed shards are scored).
+    """
+    root = open_store(path, "r")
+    names = set(root.array_keys())
+    if array not in names:
+        raise StoreError(f"store {str(path)!r} has no {array!r} label array; it holds "
+                         f"{sorted(names) or 'no arrays'}")
+    fault = root[array]
+    if fault.ndim != 3:
+        raise StoreError(f"store {str(path)!r}: {array!r} must have shape (N, H, W), "
+                         f"got {fault.shape}")
+    n = int(fault.shape[0])
+    if n == 0:
+        raise StoreError(f"store {str(path)!r} is empty: {array!r} holds 0 samples")
+    valid = done_samples(root, n, path)
+    return TruthStore(path=str(path), fault=fault, valid=valid, params=read_params(root, n))
+
+
+def open_sections(path: str | Path, array: str = "seismic") -> tuple[Any, NDArray[np.bool_]]:
+    """The (N, H, W) array ``array`` of a store and the mask of its completed samples."""
+    root = open_store(path, "r")
+    if array not in set(root.array_keys()):
+        raise StoreError(f"store {str(path)!r} has no {array!r} array; it holds "
+                         f"{sorted(root.array_keys())}")
+    arr = root[array]
+    if arr.ndim != 3 or 0 in arr.shape:
+        raise StoreError(f"store {str(path)!r}: {array!r} must be a non-empty (N, H, W) "
+                         f"array, got shape {arr.shape}")
+    return arr, done_samples(root, int(arr.shape[0]), path)
+
+
+def read_section(store: str | Path, sample: int) -> tuple[np.ndarray, dict]:
+    """Section ``sample`` (nz, nx) float32 and the store's ``grid`` attribute."""
+    path = Path(store)
+    group = open_store(path, "r")
+    if "seismic" not in group:
+        raise StoreError(f"store {str(path)!r} has no 'seismic' array")
+    grid = group.attrs.get("grid")
+    need = ("x0_m", "top_m", "cell_m", "nz", "nx")
+    if not isinstance(grid, dict) or any(k not in grid for k in need):
+        raise StoreError(f"store {str(path)!r} lacks the root attribute 'grid' with keys {need}")
+    arr = group["seismic"]
+    n = arr.shape[0]
+    if isinstance(sample, bool) or not isinstance(sample, (int, np.integer)) \
+            or not 0 <= sample < n:
+        raise InputError(f"--sample {sample!r} is out of range: the store has samples 0..{n - 1}")
+    section = np.asarray(arr[int(sample)], dtype=np.float32)
+    if section.shape != (int(grid["nz"]), int(grid["nx"])) and grid.get("domain") != "time":
+        raise StoreError(f"seismic sample shape {section.shape} does not match the store grid "
+                         f"(nz={grid['nz']}, nx={grid['nx']})")
+    if not np.all(np.isfinite(section)):
+        raise StoreError(f"sample {sample} of {str(path)!r} was never written (its shard is "
+                         "missing or unfinished): it holds NaN")
+    return section, dict(grid)
+
+
+def export_segy(store: str | Path, sample: int, out: str | Path, overwrite: bool = False) -> Path:
+    """Write section ``sample`` of a demseis store to the SEG-Y file ``out``.
+
+    The headers are those of :func:`demseis.seismic.segy.write_segy`.
+    """
+    from demseis.seismic.segy import write_segy
+
+    section, grid = read_section(store, sample)
+    domain = grid.get("domain", "depth")
+    dt_s = grid.get("dt_s")
+    if domain == "time" and (dt_s is None or not math.isfinite(float(dt_s))):
+        raise StoreError("store grid says domain 'time' but has no valid 'dt_s'")
+    return write_segy(section, out, x0_m=float(grid["x0_m"]), cell_m=float(grid["cell_m"]),
+                      top_m=float(grid["top_m"]), domain=domain, dt_s=dt_s, overwrite=overwrite,
+                      note=f"store {Path(store).name} sample {sample}")
+
+
+def _fmt(v: object) -> str:
+    f = float(v)  # type: ignore[arg-type]
+    return "inf" if math.isinf(f) else f"{f:g}"
+
+
+def store_summary(path: str | Path) -> list[str]:
+    """Lines describing a store: samples, shapes, parameter ranges over done samples, config
+    and failed runs (what ``demseis info`` prints)."""
+    root = open_store(path)
+    attrs = dict(root.attrs)
+    cfg = attrs.get("config", {})
+    codes = attrs.get("param_codes", {})
+    lines = [f"store: {path}", f"demseis schema: {attrs.get('demseis', {})}"]
+    n, h, w = root["seismic"].shape
+    n_shards = int(root["shard_done"].shape[0]) if "shard_done" in root else 1
+    status = np.asarray(root["shard_done"][:]) if "shard_done" in root else np.ones(1)
+    lines.append(f"samples: {n} in {n_shards} shards of {n // max(n_shards, 1)}; "
+                 f"done shards: {int((status == 1).sum())}")
+    grid = attrs.get("grid", {})
+    lines.append(f"grid: {h} x {w} cells of {grid.get('cell_m')} m")
+    for name in ("seismic", "fault", "damage", "strain", "layer", "impedance"):
+        if name in root:
+            a = root[name]
+            lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks {tuple(a.chunks)}")
+    done = np.repeat(status == 1, n // max(n_shards, 1))
+    lines.append("parameters (over done samples):")
+    for name, vals in read_params(root, int(n)).items():
+        vals = vals[done]
+        if vals.size == 0:
+            continue
+        if name in codes:
+            uniq = sorted({codes[name][int(v)] for v in vals})
+            lines.append(f"  {name:22s} {', '.join(uniq)}")
+            continue
+        uniq = np.unique(vals)
+        if uniq.size <= 6:
+            shown = ", ".join(_fmt(v) for v in uniq)
+        else:
+            shown = f"{_fmt(vals.min())} .. {_fmt(vals.max())} ({uniq.size} distinct)"
+        lines.append(f"  {name:22s} {shown}")
+    if cfg:
+        sw = cfg.get("sweep", {})
+        model = cfg.get("model", {})
+        lines.append(f"config: name={cfg.get('name')} seed={sw.get('seed')} n_runs={sw.get('n_runs')} "
+                     f"model={model.get('width_m')}x{model.get('height_m')} m "
+                     f"snapshots={model.get('n_snapshots')}")
+    failed = attrs.get("failures") or {}
+    if failed:
+        lines.append(f"failed runs: {len(failed)}")
+        for k, v in sorted(failed.items(), key=lambda kv: int(kv[0])):
+            lines.append(f"  run {k}: {v}")
+    return lines

@@ -1,0 +1,139 @@
+"""The import graph of the package runs one way, and nothing imports ``tests``.
+
+cli -> plotting / bench / api -> generator -> evaluation -> datasets -> dem | seismic | labels
+-> types / parameters / testing -> errors. A stage (dem, seismic, labels) never imports
+``datasets`` and reaches another stage only through its package (``from demseis.seismic import
+rasterise``), never its modules. Every import counts, including those inside functions.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PKG = ROOT / "demseis"
+STAGES = ("dem", "seismic", "labels")
+
+#: rank of each top-level part of the package: a module may import only parts of lower or equal
+#: rank (equal only within the same part)
+RANK = {
+    "errors": 0,
+    "types": 1, "parameters": 1,
+    "testing": 2,
+    "dem": 3, "seismic": 3, "labels": 3,
+    "datasets": 4,
+    "evaluation": 5,
+    "generator": 6,
+    "api": 7, "plotting": 7, "bench": 7,
+    "cli": 8, "__main__": 9,
+}
+#: names of the root package any module may import (the root module imports nothing heavy)
+ROOT_NAMES = {"__version__", "DemseisError"}
+
+
+def _part(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def _imports(path: Path) -> list[tuple[str, list[str], int]]:
+    """(module, imported names, line) of every import in ``path``, relative ones resolved."""
+    rel = path.relative_to(ROOT).with_suffix("")
+    pkg_parts = list(rel.parts[:-1]) if rel.name != "__init__" else list(rel.parts[:-1])
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            out += [(a.name, [], node.lineno) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = pkg_parts[: len(pkg_parts) - node.level + 1]
+                mod = ".".join(base + ([node.module] if node.module else []))
+            else:
+                mod = node.module or ""
+            out.append((mod, [a.name for a in node.names], node.lineno))
+    return out
+
+
+def _module_files() -> list[Path]:
+    return sorted(p for p in PKG.rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def test_every_part_has_a_rank():
+    parts = {p.relative_to(PKG).parts[0].removesuffix(".py") for p in _module_files()}
+    parts.discard("__init__")
+    assert parts <= set(RANK), f"give these parts a rank in tests/test_layout.py: {parts - set(RANK)}"
+
+
+def test_imports_run_one_way():
+    bad = []
+    for path in _module_files():
+        rel = path.relative_to(PKG)
+        if rel.parts == ("__init__.py",):
+            continue  # the front door: checked by test_root_imports_lazily
+        me = rel.parts[0].removesuffix(".py")
+        for mod, names, line in _imports(path):
+            if mod == "demseis":
+                # `from demseis import x`: only the light root names, or a subpackage of lower rank
+                for n in names:
+                    if n in ROOT_NAMES:
+                        continue
+                    if n not in RANK or (RANK[n] >= RANK[me] and n != me):
+                        bad.append(f"{rel}:{line} imports demseis.{n}")
+                continue
+            if not mod.startswith("demseis."):
+                continue
+            other = _part(mod)
+            if other == me:
+                continue
+            if me in STAGES and other in STAGES:
+                if mod != f"demseis.{other}":
+                    bad.append(f"{rel}:{line}: stage {me} imports {mod}, an internal of stage "
+                               f"{other}")
+            elif RANK.get(other, 99) >= RANK[me]:
+                bad.append(f"{rel}:{line} ({me}, rank {RANK[me]}) imports {mod} "
+                           f"({other}, rank {RANK.get(other)})")
+    assert not bad, "imports against the data flow:\n" + "\n".join(bad)
+
+
+def test_root_imports_lazily():
+    """demseis/__init__.py imports nothing at import time but errors (the rest is lazy)."""
+    tree = ast.parse((PKG / "__init__.py").read_text())
+    top = [n for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom))]
+    mods = {n.module if isinstance(n, ast.ImportFrom) else n.names[0].name for n in top}
+    assert mods <= {"__future__", "demseis.errors", "typing", "importlib"}, mods
+
+
+def test_no_stage_imports_datasets():
+    for stage in STAGES:
+        for path in (PKG / stage).rglob("*.py"):
+            for mod, names, line in _imports(path):
+                assert not mod.startswith("demseis.datasets") and not (
+                    mod == "demseis" and "datasets" in names), f"{path}:{line} imports {mod}"
+
+
+def test_nothing_imports_tests():
+    bad = []
+    for folder in ("demseis", "benchmarks", "examples", "scripts"):
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            for mod, _, line in _imports(path):
+                if mod == "tests" or mod.startswith("tests."):
+                    bad.append(f"{path.relative_to(ROOT)}:{line} imports {mod}")
+    assert not bad, "\n".join(bad)
+
+
+def test_checker_catches_a_backward_import(tmp_path, monkeypatch):
+    """The rank rule is not vacuous: a stage importing datasets is caught."""
+    fake = tmp_path / "demseis"
+    (fake / "seismic").mkdir(parents=True)
+    (fake / "__init__.py").write_text("")
+    (fake / "seismic" / "x.py").write_text("from demseis.datasets import open_store\n"
+                                           "from demseis.labels.maps import label_maps\n")
+    monkeypatch.setattr(f"{__name__}.PKG", fake)
+    monkeypatch.setattr(f"{__name__}.ROOT", tmp_path)
+    try:
+        test_imports_run_one_way()
+    except AssertionError as exc:
+        assert "imports demseis.datasets" in str(exc) and "internal of stage labels" in str(exc)
+    else:
+        raise AssertionError("a seismic -> datasets import passed the check")
