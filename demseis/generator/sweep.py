@@ -8,7 +8,9 @@ resumes where it stopped and gives the same bytes as an uninterrupted one.
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 import math
 import os
 import sys
@@ -271,7 +273,8 @@ def run_sweep(
     t0 = time.perf_counter()
     remote = _connect(scheduler) if scheduler is not None else None  # fail before writing
     try:
-        status = prepare_store(cfg, out, overwrite=overwrite)
+        with _sigint_deferred():  # a store is created whole: Ctrl-C waits for the metadata
+            status = prepare_store(cfg, out, overwrite=overwrite)
     except BaseException:
         if remote is not None:
             remote.close()
@@ -297,8 +300,9 @@ def run_sweep(
         if remote is not None and not pending:
             remote.close()
     t_fin = time.perf_counter()
-    record_failures(out, summary.failed)
-    finalize_store(out)
+    with _sigint_deferred():
+        record_failures(out, summary.failed)
+        finalize_store(out)
     summary.phase_seconds["finalize"] = time.perf_counter() - t_fin
     summary.seconds = time.perf_counter() - t0
     return summary
@@ -328,46 +332,20 @@ def _connect(scheduler: str) -> Any:
 
 def _run_distributed(store: str, cfg: Config, pending: list[int], summary: SweepSummary,
                      bar: Any, workers: int | None, remote: Any, retries: int) -> None:
-    import dask
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import as_completed
 
     cluster = None
     t_start = time.perf_counter()
-    if remote is not None:
-        client = remote
-    else:
-        # warm the Numba cache while the worker processes start: tasks are submitted only
-        # after both, so no worker compiles a kernel the driver is compiling
-        import threading
-
-        warm_errors: list[BaseException] = []
-
-        def warm() -> None:
-            t_warm = time.perf_counter()
-            try:
-                warm_numba_cache()
-                summary.phase_seconds["warm"] = time.perf_counter() - t_warm
-            except BaseException as exc:  # re-raised in the driver below
-                warm_errors.append(exc)
-
-        warmer = threading.Thread(target=warm, name="demseis-warm-numba")
-        warmer.start()
-        n = workers or os.cpu_count() or 1
-        env = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-               "OPENBLAS_NUM_THREADS": "1"}
-        os.environ.update(env)  # inherited by the spawned worker processes
-        with dask.config.set({"distributed.worker.daemon": False,
-                              "distributed.scheduler.allowed-failures": retries + 1}):
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, env=env, silence_logs=40)
-            client = Client(cluster)
-        warmer.join()
-        if warm_errors:
-            client.close()
-            cluster.close()
-            raise warm_errors[0]
-    summary.phase_seconds["start"] = time.perf_counter() - t_start
+    # Ctrl-C reaches the terminal's whole process group: the worker processes ignore it (see
+    # _start_local_cluster) and the driver closes the cluster in the ``finally`` below, so an
+    # interrupted sweep prints no worker traceback and leaks no semaphore.
+    client = None
     try:
+        if remote is not None:
+            client = remote
+        else:
+            client, cluster = _start_local_cluster(summary, workers, retries)
+        summary.phase_seconds["start"] = time.perf_counter() - t_start
         t_compute = time.perf_counter()
         # longest runs first (LPT): fewer workers idle at the end of a sweep of unequal runs
         cfg_dict = cfg.to_dict()
@@ -384,16 +362,144 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
                 summary.failed[shard_of[fut.key]] = f"{type(exc).__name__}: {exc}"
         summary.compute_seconds = time.perf_counter() - t_compute
         summary.phase_seconds["compute"] = summary.compute_seconds
+    except KeyboardInterrupt:
+        _quiet_dask_logs()  # the scheduler would log the tasks cancelled by the shut-down
+        raise
     finally:
         t_close = time.perf_counter()
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        with _sigint_deferred():  # a second Ctrl-C does not cut the clean shut-down short
+            if client is not None:
+                client.close()
+            if cluster is not None:
+                cluster.close()
         summary.phase_seconds["close"] = time.perf_counter() - t_close
 
 
-def _progress_bar(total: int, enabled: bool) -> Any:
+def _quiet_dask_logs() -> None:
+    """Only CRITICAL from dask's loggers in this process (an interrupted sweep shutting down)."""
+    import logging
+
+    for name in list(logging.root.manager.loggerDict):
+        if name == "distributed" or name.startswith("distributed."):
+            logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
+@contextlib.contextmanager
+def _sigint_deferred() -> Any:
+    """Hold SIGINT in the main thread for the block; one that arrived is raised at its end."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got: list[int] = []
+    old = signal.signal(signal.SIGINT, lambda signum, frame: got.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+    if got:
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def _sigint_ignored() -> Any:
+    """SIGINT ignored (SIG_IGN) for the block: processes spawned meanwhile inherit it."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _wait_spawned(n: int, timeout_s: float = 60.0) -> None:
+    """Wait until ``n`` worker processes (multiprocessing spawn children) exist."""
+    import psutil
+
+    me = psutil.Process()
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        found = 0
+        for child in me.children(recursive=True):
+            try:
+                found += "spawn_main" in " ".join(child.cmdline())
+            except (psutil.NoSuchProcess, psutil.ZombieProcess, psutil.AccessDenied):
+                continue
+        if found >= n:
+            return
+        time.sleep(0.01)
+
+
+def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: int) -> tuple[Any, Any]:
+    """A LocalCluster of single-threaded worker processes and its client, the Numba cache warm.
+
+    The cache is warmed in a thread while the worker processes start: tasks are submitted only
+    after both, so no worker compiles a kernel the driver is compiling.
+    """
+    import threading
+
+    import dask
+    from distributed import Client, LocalCluster
+
+    from demseis.generator._worker import IgnoreSigint
+
+    warm_errors: list[BaseException] = []
+
+    def warm() -> None:
+        t_warm = time.perf_counter()
+        try:
+            warm_numba_cache()
+            summary.phase_seconds["warm"] = time.perf_counter() - t_warm
+        except BaseException as exc:  # re-raised in the driver below
+            warm_errors.append(exc)
+
+    warmer = threading.Thread(target=warm, name="demseis-warm-numba")
+    warmer.start()
+    n = workers or os.cpu_count() or 1
+    env = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+           "OPENBLAS_NUM_THREADS": "1"}
+    os.environ.update(env)  # inherited by the spawned worker processes
+    cluster = client = None
+    try:
+        with dask.config.set({"distributed.worker.daemon": False,
+                              "distributed.scheduler.allowed-failures": retries + 1}):
+            # No dashboard (dashboard_address=None would mean the default :8787, and a warning
+            # when another cluster holds that port). Logs: CRITICAL only; task errors reach the
+            # driver through the futures and end up in the summary, and a worker cut off by an
+            # interrupted driver must not print tracebacks.
+            cluster = LocalCluster(n_workers=0, threads_per_worker=1, processes=True,
+                                   scheduler_kwargs={"dashboard": False}, env=env,
+                                   silence_logs=logging.CRITICAL)
+            client = Client(cluster)
+            client.register_plugin(IgnoreSigint())  # workers started later (restarts) too
+            # The workers are spawned with SIGINT ignored, so they ignore it from their first
+            # import on; the driver ignores it only for the ~0.1 s the spawns take.
+            with _sigint_ignored():
+                cluster.scale(n)
+                _wait_spawned(n)
+            client.wait_for_workers(n)
+        warmer.join()
+        if warm_errors:
+            raise warm_errors[0]
+    except BaseException:
+        warmer.join()
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+        raise
+    return client, cluster
+
+
+def _progress_bar(total: int, enabled: bool, desc: str = "generate") -> Any:
     from tqdm import tqdm
 
-    return tqdm(total=total, unit="sample", desc="generate", disable=not enabled,
+    return tqdm(total=total, unit="sample", desc=desc, disable=not enabled,
                 file=sys.stderr, dynamic_ncols=True)

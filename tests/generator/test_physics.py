@@ -63,7 +63,7 @@ def test_wall_speed_bound_is_the_p_wave_fraction():
 
 def test_run_without_fault_is_recorded(tmp_path, capsys):
     """A run whose last snapshot has no fault pixel is named in the sweep summary."""
-    from demseis.generator.cli import main
+    from demseis.cli import main
 
     cfg = tmp_path / "c.toml"
     # 4 m of throw (slowly, to stay quasi-static) is below the labels' minimum slip: no fault
