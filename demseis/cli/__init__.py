@@ -60,6 +60,15 @@ def _missing_sub(parser: argparse.ArgumentParser) -> int:
     return 2
 
 
+def _path_arg(args: argparse.Namespace | None) -> str:
+    """The output (or store) path of a command, to name in a filesystem error without one."""
+    for name in ("out", "store"):
+        value = getattr(args, name, None)
+        if value:
+            return str(value)
+    return "(path unknown)"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the process exit code."""
     try:
@@ -72,6 +81,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except DemseisError as exc:
         print(f"demseis: error: {exc}", file=sys.stderr)
         return exc.exit_code
+    except OSError as exc:  # read-only or full filesystem, a path under /proc, permissions
+        where = exc.filename if exc.filename is not None else _path_arg(locals().get("args"))
+        print(f"demseis: error: {where}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         # an interrupted zarr call leaves a task on zarr's event loop; asyncio would log
         # "Task was destroyed but it is pending!" (or "never awaited") at exit. What was written is consistent

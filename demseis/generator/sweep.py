@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from demseis.errors import ConfigError, InputError, SimulationError
+from demseis.errors import ConfigError, InputError, SimulationError, StoreError
 from demseis.generator.config import Config, parse_config
 from demseis.generator.pipeline import (
     PARAM_CODES,
@@ -166,7 +166,10 @@ def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, An
     except SimulationError as exc:
         return {"shard": shard, "error": f"SimulationError: {exc}"}
     t2 = time.perf_counter()
-    write_shard(store, shard, data.arrays, data.params, data.snapshots)
+    try:
+        write_shard(store, shard, data.arrays, data.params, data.snapshots)
+    except OSError as exc:  # disk full, read-only, permissions: retrying cannot help
+        return {"shard": shard, "os_error": describe_os_error(exc, store)}
     t3 = time.perf_counter()
     snapshot = np.asarray(data.params["snapshot"])
     last = snapshot == snapshot.max()
@@ -308,8 +311,21 @@ def run_sweep(
     return summary
 
 
+def describe_os_error(exc: OSError, path: str | Path) -> str:
+    """``PATH: cause`` for a filesystem error (the path it names, else ``path``)."""
+    where = exc.filename if exc.filename is not None else path
+    return f"{where}: {exc.strerror or exc}"
+
+
 def _account(summary: SweepSummary, bar: Any, result: dict[str, Any]) -> None:
-    """Book one finished task's result (written shard, or a run recorded as failed)."""
+    """Book one finished task's result (written shard, or a run recorded as failed).
+
+    A shard that could not be written (disk full, read-only) stops the sweep with a
+    :class:`StoreError`: its done flag is not set, so the same command resumes it later.
+    """
+    if "os_error" in result:
+        raise StoreError(f"cannot write run {result['shard']}: {result['os_error']}; fix that "
+                         "(free space, permissions) and run the same command to resume")
     if "error" in result:
         summary.failed[result["shard"]] = result["error"]
     else:
@@ -362,7 +378,7 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
                 summary.failed[shard_of[fut.key]] = f"{type(exc).__name__}: {exc}"
         summary.compute_seconds = time.perf_counter() - t_compute
         summary.phase_seconds["compute"] = summary.compute_seconds
-    except KeyboardInterrupt:
+    except BaseException:
         _quiet_dask_logs()  # the scheduler would log the tasks cancelled by the shut-down
         raise
     finally:
