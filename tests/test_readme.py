@@ -43,3 +43,19 @@ def test_tour_commands_exist():
     tour = next(b for b in _blocks("bash") if "Five" in b or "demseis info" in b)
     used = {line.split()[1] for line in tour.splitlines() if line.startswith("demseis ")}
     assert used <= commands, used - commands
+
+
+def test_tour_lines_parse_when_pasted():
+    """Every tour line is a real command line (no `a | b` shorthand that fails when pasted)."""
+    import shlex
+
+    parser = build_parser()
+    tour = next(b for b in _blocks("bash") if "Five" in b or "demseis info" in b)
+    for line in tour.splitlines():
+        if not line.startswith("demseis "):
+            continue
+        args = shlex.split(line.split("  #")[0])[1:]
+        try:
+            parser.parse_args(args)
+        except SystemExit as exc:
+            raise AssertionError(f"README tour line does not parse: {line!r}") from exc

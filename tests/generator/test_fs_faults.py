@@ -105,3 +105,23 @@ def test_real_disk_full_then_resume(reference, mount_point, capsys):
     filler.unlink()
     assert main(_gen(out)) == 0
     assert_same_bytes(reference, out)
+
+
+def test_plot_out_name_is_kept(reference, tmp_path, capsys):
+    """``plot --out x`` writes x (PNG), not x.png; an unknown suffix is refused clearly."""
+    out = tmp_path / "x"
+    assert main(["plot", str(reference), "--sample", "1", "--out", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not (tmp_path / "x.png").exists()
+    capsys.readouterr()
+    assert main(["plot", str(reference), "--sample", "1", "--out", str(tmp_path / "y.pngx")]) == 2
+    _one_error_line(capsys.readouterr().err, "y.pngx", "unknown image type")
+
+
+def test_object_predictions_are_named_not_a_pickle_hint(reference, tmp_path, capsys):
+    import numpy as np
+
+    pred = tmp_path / "p.npy"
+    np.save(pred, np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    assert main(["score", str(pred), str(reference)]) == 2
+    _one_error_line(capsys.readouterr().err, "Python objects", "astype(np.float32)")
