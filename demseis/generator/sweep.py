@@ -136,6 +136,15 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
                 f"{diff}); use --overwrite to replace it, or choose another --out"
             )
         return shard_status(out)
+    # A new store is built beside ``out`` and renamed into place, so a kill -9 while its
+    # arrays are being created leaves no half-made store at ``out`` (found by the kill test).
+    target = out
+    if not out.exists():
+        out = out.with_name(f".{out.name}.creating-{os.getpid()}")
+        if out.exists():
+            import shutil
+
+            shutil.rmtree(out)
     create_store(
         out,
         n_shards=cfg.sweep.n_runs,
@@ -146,7 +155,9 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
         attrs=attrs,
         overwrite=overwrite,
     )
-    return shard_status(out)
+    if out != target:
+        os.rename(out, target)
+    return shard_status(target)
 
 
 def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, Any]:
@@ -500,7 +511,12 @@ def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: in
             with _sigint_ignored():
                 cluster.scale(n)
                 _wait_spawned(n)
-            client.wait_for_workers(n)
+            # Tasks go out as soon as one worker is up (the others join as they start), and
+            # a worker killed while starting does not make the sweep wait for it for ever.
+            try:
+                client.wait_for_workers(1, timeout=120)
+            except TimeoutError:
+                raise InputError("no dask worker started within 120 s") from None
         warmer.join()
         if warm_errors:
             raise warm_errors[0]
