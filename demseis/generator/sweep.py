@@ -145,16 +145,23 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
             import shutil
 
             shutil.rmtree(out)
-    create_store(
-        out,
-        n_shards=cfg.sweep.n_runs,
-        samples_per_shard=cfg.samples_per_run,
-        shape=sample_shape(cfg),
-        arrays=array_dtypes(cfg),
-        params=param_dtypes(),
-        attrs=attrs,
-        overwrite=overwrite,
-    )
+    try:
+        create_store(
+            out,
+            n_shards=cfg.sweep.n_runs,
+            samples_per_shard=cfg.samples_per_run,
+            shape=sample_shape(cfg),
+            arrays=array_dtypes(cfg),
+            params=param_dtypes(),
+            attrs=attrs,
+            overwrite=overwrite,
+        )
+    except OSError as exc:  # name the path the user gave, not the temporary one
+        if out != target:
+            import shutil
+
+            shutil.rmtree(out, ignore_errors=True)
+        raise OSError(exc.errno, exc.strerror, str(target)) from None
     if out != target:
         os.rename(out, target)
     return shard_status(target)
