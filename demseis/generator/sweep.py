@@ -504,11 +504,12 @@ def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: in
     try:
         with dask.config.set({"distributed.worker.daemon": False,
                               "distributed.scheduler.allowed-failures": retries + 1}):
-            # No dashboard (dashboard_address=None would mean the default :8787, and a warning
-            # when another cluster holds that port). Logs: CRITICAL only; task errors reach the
+            # No dashboard; the scheduler's small HTTP server (health routes) on any free port:
+            # the default :8787 warns when another cluster holds it. Logs: CRITICAL only; task errors reach the
             # driver through the futures and end up in the summary, and a worker cut off by an
             # interrupted driver must not print tracebacks.
             cluster = LocalCluster(n_workers=0, threads_per_worker=1, processes=True,
+                                   dashboard_address=":0",  # any free port: no warning
                                    scheduler_kwargs={"dashboard": False}, env=env,
                                    silence_logs=logging.CRITICAL)
             client = Client(cluster)
