@@ -1,12 +1,16 @@
-"""Sweep throughput with 1 and 2 dask workers on the quick preset (one JSON line).
+"""Sweep throughput with 1 and 2 dask workers, and where the time goes (one JSON line).
 
-Runs ``run_sweep`` on the quick preset alternately with 1 and 2 LocalCluster workers,
-``--repeats`` times each, into fresh stores, and reports median samples/s end to end
-(cluster start-up included) and in the compute phase (first task submitted to last task done),
-and the 2-worker / 1-worker ratios. The machine is shared: compare the ratios, not the absolute
-numbers.
+Runs ``run_sweep`` alternately with 1 and 2 LocalCluster workers (``--workers 1,2``),
+``--repeats`` times each, into fresh stores, and reports medians of: samples/s end to end
+(cluster start-up included, as ``demseis generate`` sees it) and in the compute phase (first
+task submitted to last task done); the ratios to one worker; and per phase, the driver's wall
+seconds (prepare the store, start the cluster with the overlapped Numba warm-up, compute,
+close the cluster, finalize) and the tasks' seconds (DEM, render, store write), the task
+overhead (compute time × workers − task time: scheduling, worker imports and Numba cache loads
+in the first task, and imbalance at the end), and the tail (compute end − the first worker to
+go idle). The machine is shared: compare the ratios, not the absolute numbers.
 
-    python benchmarks/sweep.py [--repeats 2] [--preset quick]
+    python benchmarks/sweep.py [--repeats 3] [--preset quick] [--workers 1,2]
 """
 
 from __future__ import annotations
@@ -22,41 +26,62 @@ from demseis.generator.config import load_config
 from demseis.generator.sweep import run_sweep
 
 
+def _profile(s, workers: int) -> dict[str, float]:
+    n = s.n_samples_written
+    tasks = s.tasks
+    last_end_per_worker = {}
+    for t in tasks:
+        last_end_per_worker[t["pid"]] = max(last_end_per_worker.get(t["pid"], 0.0), t["end"])
+    task_s = sum(t["seconds"] for t in tasks)
+    out = {
+        "e2e_samples_per_s": n / s.seconds,
+        "compute_samples_per_s": n / s.compute_seconds,
+        "wall_s": s.seconds,
+        **{f"{k}_s": v for k, v in s.phase_seconds.items()},
+        "task_dem_s": sum(t["dem_s"] for t in tasks),
+        "task_render_s": sum(t["render_s"] for t in tasks),
+        "task_write_s": sum(t["write_s"] for t in tasks),
+        "task_overhead_s": workers * s.compute_seconds - task_s,
+        "tail_s": (max(last_end_per_worker.values()) - min(last_end_per_worker.values()))
+        if len(last_end_per_worker) > 1 else 0.0,
+        "first_task_s": max(t["seconds"] for t in tasks) if tasks else 0.0,
+    }
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--preset", default="quick")
+    ap.add_argument("--config", default=None, help="a TOML config layered on --preset")
+    ap.add_argument("--workers", default="1,2", help="comma-separated worker counts")
     args = ap.parse_args()
-    cfg = load_config(preset=args.preset)
-    results: dict[int, dict[str, list[float]]] = {1: {"e2e": [], "compute": []}, 2: {"e2e": [], "compute": []}}
+    cfg = load_config(args.config, preset=args.preset)
+    counts = [int(w) for w in args.workers.split(",")]
+    results: dict[int, list[dict[str, float]]] = {w: [] for w in counts}
     tmp = Path(tempfile.mkdtemp(prefix="demseis-sweep-bench-"))
     try:
         for rep in range(args.repeats):
-            for workers in (1, 2):
+            for workers in counts:
                 out = tmp / f"w{workers}-r{rep}.zarr"
                 s = run_sweep(cfg, out, workers=workers, progress=False)
                 if s.failed:
                     raise SystemExit(f"sweep failed: {s.failed}")
-                n = s.n_samples_written
-                results[workers]["e2e"].append(n / s.seconds)
-                results[workers]["compute"].append(n / s.compute_seconds)
+                results[workers].append(_profile(s, workers))
                 shutil.rmtree(out)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    med = {w: {k: statistics.median(v) for k, v in r.items()} for w, r in results.items()}
-    print(json.dumps({
-        "benchmark": "sweep",
-        "preset": args.preset,
-        "samples": cfg.n_samples,
-        "runs": cfg.sweep.n_runs,
-        "repeats": args.repeats,
-        "samples_per_s_1_worker": round(med[1]["e2e"], 3),
-        "samples_per_s_2_workers": round(med[2]["e2e"], 3),
-        "speedup_2_vs_1": round(med[2]["e2e"] / med[1]["e2e"], 3),
-        "compute_samples_per_s_1_worker": round(med[1]["compute"], 3),
-        "compute_samples_per_s_2_workers": round(med[2]["compute"], 3),
-        "compute_speedup_2_vs_1": round(med[2]["compute"] / med[1]["compute"], 3),
-    }))
+    med = {w: {k: round(statistics.median(r[k] for r in rs if k in r), 3)
+               for k in rs[0]} for w, rs in results.items()}
+    base = counts[0]
+    line = {"benchmark": "sweep", "preset": args.preset, "config": args.config,
+            "samples": cfg.n_samples, "runs": cfg.sweep.n_runs, "repeats": args.repeats,
+            "medians": {str(w): m for w, m in med.items()}}
+    for w in counts[1:]:
+        line[f"speedup_{w}_vs_{base}"] = round(med[w]["e2e_samples_per_s"] / med[base]["e2e_samples_per_s"], 3)
+        line[f"compute_speedup_{w}_vs_{base}"] = round(
+            med[w]["compute_samples_per_s"] / med[base]["compute_samples_per_s"], 3)
+    print(json.dumps(line))
 
 
 if __name__ == "__main__":

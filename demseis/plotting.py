@@ -255,8 +255,14 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     fig.suptitle(f"sample {index}: run {int(p['run_id'])}, snapshot {int(p['snapshot'])}, "
                  f"dip {float(p['dip_deg']):.0f}°, throw so far {float(p['throw_m']):.0f} m")
     out = Path(out)
+    # the name is kept as given: no suffix means PNG (matplotlib would append ".png")
+    fmt = out.suffix[1:].lower() or "png"
+    if fmt not in fig.canvas.get_supported_filetypes():
+        plt.close(fig)
+        raise InputError(f"--out {str(out)!r}: unknown image type {out.suffix!r}; use .png, "
+                         ".pdf, .svg or no suffix (PNG)")
     out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110, bbox_inches="tight")
+    fig.savefig(out, dpi=110, bbox_inches="tight", format=fmt)
     plt.close(fig)
     return out
 

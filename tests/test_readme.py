@@ -46,3 +46,19 @@ def test_python_api_snippet_runs(tmp_path, monkeypatch, capsys):
     assert "<demseis.Store 'tiny.zarr'" in out and "snr_db" in out
     assert scope["sample"]["seismic"].shape == scope["store"].layout.shape
     assert scope["result"].overall.n_samples == len(scope["store"])
+
+
+def test_tour_lines_parse_when_pasted():
+    """Every tour line is a real command line (no `a | b` shorthand that fails when pasted)."""
+    import shlex
+
+    parser = build_parser()
+    tour = next(b for b in _blocks("bash") if "Five" in b or "demseis info" in b)
+    for line in tour.splitlines():
+        if not line.startswith("demseis "):
+            continue
+        args = shlex.split(line.split("  #")[0])[1:]
+        try:
+            parser.parse_args(args)
+        except SystemExit as exc:
+            raise AssertionError(f"README tour line does not parse: {line!r}") from exc

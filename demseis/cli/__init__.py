@@ -60,20 +60,41 @@ def _missing_sub(parser: argparse.ArgumentParser) -> int:
     return 2
 
 
+def _path_arg(args: argparse.Namespace | None) -> str:
+    """The output (or store) path of a command, to name in a filesystem error without one."""
+    for name in ("out", "store"):
+        value = getattr(args, name, None)
+        if value:
+            return str(value)
+    return "(path unknown)"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the process exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 2
     try:
+        parser = build_parser()  # imports the command modules: Ctrl-C may land here too
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 2
         return int(args.func(args) or 0)
     except DemseisError as exc:
         print(f"demseis: error: {exc}", file=sys.stderr)
         return exc.exit_code
+    except OSError as exc:  # read-only or full filesystem, a path under /proc, permissions
+        where = exc.filename if exc.filename is not None else _path_arg(locals().get("args"))
+        print(f"demseis: error: {where}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
-        print("demseis: interrupted; rerun the same command to resume", file=sys.stderr)
+        # an interrupted zarr call leaves a task on zarr's event loop; asyncio would log
+        # "Task was destroyed but it is pending!" (or "never awaited") at exit. What was written is consistent
+        # (a shard counts only once its done flag is set), so that message is noise.
+        import logging
+        import warnings
+
+        logging.getLogger("asyncio").setLevel(logging.CRITICAL)
+        warnings.filterwarnings("ignore", message="coroutine .* was never awaited")
+        print("demseis: interrupted; run the same command to resume", file=sys.stderr)
         return 130
 
 

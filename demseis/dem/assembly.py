@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from demseis.dem import detmath
 from demseis.dem.engine import Engine, time_step, validate_material
 from demseis.dem.types import Material
 from demseis.errors import InputError
@@ -86,7 +87,9 @@ def draw_radii(n: int, radius_min_m: float, radius_max_m: float,
     if radius_max_m == radius_min_m:
         return np.full(n, float(radius_min_m))
     u = rng.random(n)
-    return radius_min_m * (radius_max_m / radius_min_m) ** u
+    # not (r_max / r_min) ** u: np.power's result depends on the CPU (see detmath)
+    log_ratio = float(detmath.log(radius_max_m / radius_min_m))
+    return radius_min_m * detmath.exp(u * log_ratio)
 
 
 def _check_geometry(width_m, height_m, radius_min_m, radius_max_m):
@@ -175,14 +178,14 @@ def settle_pack(width_m: float, height_m: float, *, radius_min_m: float = 12.5,
     if cache_dir is not None:
         blob = json.dumps({"w": width_m, "h": height_m, "rmin": radius_min_m,
                            "rmax": radius_max_m, "mat": asdict(material), "seed": seed_key,
-                           "v": 1}, sort_keys=True)
+                           "v": 2}, sort_keys=True)  # v2: radii drawn with detmath (CPU-independent)
         key = hashlib.sha256(blob.encode()).hexdigest()[:20]
         path = Path(cache_dir) / f"pack_{key}.npz"
         if path.exists():
             with np.load(path) as z:
                 return Pack(z["xy"].copy(), z["radius"].copy(), float(width_m), float(height_m))
     mean_area = math.pi * (radius_max_m**2 - radius_min_m**2) / (
-        2 * math.log(radius_max_m / radius_min_m)) if radius_max_m > radius_min_m else (
+        2 * float(detmath.log(radius_max_m / radius_min_m))) if radius_max_m > radius_min_m else (
         math.pi * radius_min_m**2)
     n = int(math.ceil(1.10 * _PACKING_GUESS * width_m * height_m / mean_area))
     radii = draw_radii(n, radius_min_m, radius_max_m, rng)

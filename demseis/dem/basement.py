@@ -42,6 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from demseis.dem import detmath
+
 from demseis.errors import InputError
 from demseis.parameters import MAX_BASEMENT_FAULTS, PARAMS
 
@@ -87,14 +89,14 @@ class BasementFault:
         d = math.radians(self.dip_deg)
         if self.kind == "listric":
             return self.radius_m * (d - math.acos(math.cos(d) + t / self.radius_m))
-        return t / math.sin(d)
+        return t / float(detmath.sin(d))
 
     def throw_at_slip(self, slip_m: float) -> float:
         """Vertical throw (m) after ``slip_m`` of slip along the fault."""
         d = math.radians(self.dip_deg)
         if self.kind == "listric":
             return self.radius_m * (math.cos(d - slip_m / self.radius_m) - math.cos(d))
-        return slip_m * math.sin(d)
+        return slip_m * float(detmath.sin(d))
 
 
 @dataclass(frozen=True)
@@ -217,7 +219,7 @@ def block_kinematics(system: FaultSystem, width_m: float) -> list[BlockMotion]:
     rot: dict[int, tuple[tuple[float, float], float]] = {}
     for i, f in enumerate(faults):
         d = math.radians(f.dip_deg)
-        cd, sd = math.cos(d), math.sin(d)
+        cd, sd = float(detmath.cos(d)), float(detmath.sin(d))  # same bits on every CPU
         if f.kind == "listric":
             hw = i + 1 if f.sign > 0 else i
             centre = (f.x_m + f.sign * f.radius_m * sd, f.radius_m * cd)

@@ -230,7 +230,8 @@ class Engine:
             if m == 0:
                 continue
             js = self.nbr[i, :m]
-            d = np.hypot(*(self.pos[js] - self.pos[i]).T)
+            dxy = self.pos[js] - self.pos[i]
+            d = np.sqrt(dxy[:, 0] * dxy[:, 0] + dxy[:, 1] * dxy[:, 1])  # not hypot: libm's varies
             ok = d < (self.radius[i] + self.radius[js]) * (1 + tol_frac)
             self.bond[i, :m] = ok * np.uint8(flag)
             nb += int(ok.sum())

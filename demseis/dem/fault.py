@@ -30,6 +30,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from demseis.dem import detmath
 from demseis.dem.assembly import Assembly
 from demseis.dem.basement import (BlockMotion, FaultSystem, block_kinematics, check_fault_fields,
                                   validate_system)
@@ -146,7 +147,8 @@ def _clear_of(pos: np.ndarray, radius: np.ndarray, new_xy: np.ndarray, new_r: np
     ok = np.ones(new_r.shape[0], dtype=bool)
     for i, near in enumerate(tree.query_ball_point(new_xy, reach)):
         if near:
-            d = np.hypot(*(pos[near] - new_xy[i]).T)
+            dxy = pos[near] - new_xy[i]
+            d = np.sqrt(dxy[:, 0] * dxy[:, 0] + dxy[:, 1] * dxy[:, 1])
             ok[i] = bool(np.all(d >= radius[near] + new_r[i] + gap))
     return ok
 
@@ -166,7 +168,7 @@ def as_system(fault: NormalFault | FaultSystem) -> FaultSystem:
 
 def _split(p0: np.ndarray, p1: np.ndarray, max_len: float) -> list[np.ndarray]:
     """Segments [x0, y0, x1, y1] that cut p0 -> p1 into pieces no longer than max_len."""
-    k = max(int(math.ceil(float(np.hypot(*(p1 - p0))) / max_len)), 1)
+    k = max(int(math.ceil(math.sqrt(float((p1 - p0) @ (p1 - p0))) / max_len)), 1)
     pts = p0 + (p1 - p0) * np.linspace(0.0, 1.0, k + 1)[:, None]
     return [np.r_[pts[j], pts[j + 1]] for j in range(k)]
 
@@ -212,7 +214,7 @@ def basement_walls(system: FaultSystem, motions: list[BlockMotion], width_m: flo
             break
         f = system.faults[b]
         d = math.radians(f.dip_deg)
-        cd, sd = math.cos(d), math.sin(d)
+        cd, sd = float(detmath.cos(d)), float(detmath.sin(d))  # same bits on every CPU
         a = f.sign
         xf = f.x_m
         if f.kind == "listric":

@@ -485,6 +485,11 @@ def load_predictions(path: str) -> Any:
         try:
             arr = np.load(path, mmap_mode="r", allow_pickle=False)
         except Exception as exc:
+            if "Python objects" in str(exc) or "allow_pickle" in str(exc):
+                # numpy's text suggests pickling; the fix is a numeric array, never a pickle
+                raise InputError(f"predictions {path!r} hold Python objects (dtype object), not "
+                                 "numbers: save a numeric (N, H, W) array, e.g. "
+                                 "np.save(path, pred.astype(np.float32))") from None
             raise InputError(f"predictions {path!r}: cannot read as .npy ({exc})") from exc
     else:
         import zarr

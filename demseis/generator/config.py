@@ -324,6 +324,9 @@ def _cross_checks(cfg: Config) -> None:
                 PropertyModel(**{**cfg.properties, key: value}).validate()
             except ConfigError as exc:
                 raise ConfigError(f"sweep.{key}: {exc}") from None
+    from demseis.generator.physics import check_physics
+
+    check_physics(cfg)  # cross-parameter physics: a fault can form, the run is quasi-static
 
 
 def _spec_candidates(spec: Spec) -> tuple:

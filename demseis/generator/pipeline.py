@@ -356,8 +356,16 @@ def _imaging_key(r: Render) -> tuple[str, float, float]:
     return (r.imaging, r.psf_max_angle_deg, r.psf_aperture_m if r.psf_aperture_m > 0 else math.inf)
 
 
-def run_shard(cfg: Config, run: int, progress: Callable[[float], None] | None = None) -> ShardData:
-    """DEM run ``run`` and all its renders."""
+def run_shard(cfg: Config, run: int, progress: Callable[[float], None] | None = None, *,
+              timings: dict[str, float] | None = None) -> ShardData:
+    """DEM run ``run`` and all its renders; ``timings`` (if given) gets dem_s and render_s."""
+    import time
+
+    t0 = time.perf_counter()
     spec = plan_run(cfg, run)
     snaps, info = simulate_run(cfg, spec, progress)
-    return render_run(cfg, spec, snaps, info)
+    t1 = time.perf_counter()
+    data = render_run(cfg, spec, snaps, info)
+    if timings is not None:
+        timings.update(dem_s=t1 - t0, render_s=time.perf_counter() - t1)
+    return data

@@ -8,7 +8,9 @@ resumes where it stopped and gives the same bytes as an uninterrupted one.
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 import math
 import os
 import sys
@@ -19,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from demseis.errors import ConfigError, InputError, SimulationError
+from demseis.errors import ConfigError, InputError, SimulationError, StoreError
 from demseis.generator.config import Config, parse_config
 from demseis.generator.pipeline import (
     PARAM_CODES,
@@ -47,9 +49,16 @@ class SweepSummary:
     done_before: int
     completed: list[int] = field(default_factory=list)
     failed: dict[int, str] = field(default_factory=dict)
+    #: runs written now whose last snapshot has no fault pixel (the DEM made no fault)
+    no_fault: list[int] = field(default_factory=list)
     seconds: float = 0.0
     #: seconds from the first task submitted to the last finished (no cluster start-up)
     compute_seconds: float = 0.0
+    #: wall seconds of the driver's phases: prepare (store), start (cluster + Numba warm-up,
+    #: overlapped), compute, close (cluster shutdown), finalize (failures + consolidation)
+    phase_seconds: dict[str, float] = field(default_factory=dict)
+    #: one record per finished task: shard, pid, start/end (epoch s), dem_s, render_s, write_s
+    tasks: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def n_samples_written(self) -> int:
@@ -64,10 +73,19 @@ class SweepSummary:
             f"time: {self.seconds:.1f} s"
             + (f", {self.n_samples_written / self.seconds:.2f} samples/s" if self.seconds > 0 and self.completed else ""),
         ]
+        if self.no_fault:
+            out.append(f"{len(self.no_fault)} run(s) ended with no fault (no fault pixel in the "
+                       "last snapshot): " + ", ".join(str(r) for r in sorted(self.no_fault)))
         for shard, err in sorted(self.failed.items()):
             out.append(f"  run {shard} failed: {err}")
-        if self.failed:
-            out.append("rerun the same command to retry the failed runs")
+        unstable = [e for e in self.failed.values() if e.startswith("SimulationError")]
+        if unstable:
+            # the same config and seed give the same bits, so a rerun fails the same way
+            out.append("a DEM run that went unstable fails the same way when rerun: change its "
+                       "config (lower model.wall_speed_m_s, or raise sweep.damping_scale, or "
+                       "narrow the swept ranges) and write a new --out")
+        if len(unstable) < len(self.failed):
+            out.append("rerun the same command to retry the runs that failed for another reason")
         return out
 
 
@@ -118,17 +136,35 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
                 f"{diff}); use --overwrite to replace it, or choose another --out"
             )
         return shard_status(out, verify=True)  # a damaged done shard is redone
-    create_store(
-        out,
-        n_shards=cfg.sweep.n_runs,
-        samples_per_shard=cfg.samples_per_run,
-        shape=sample_shape(cfg),
-        arrays=array_dtypes(cfg),
-        params=store_param_specs(),
-        attrs=attrs,
-        overwrite=overwrite,
-    )
-    return shard_status(out)
+    # A new store is built beside ``out`` and renamed into place, so a kill -9 while its
+    # arrays are being created leaves no half-made store at ``out`` (found by the kill test).
+    target = out
+    if not out.exists():
+        out = out.with_name(f".{out.name}.creating-{os.getpid()}")
+        if out.exists():
+            import shutil
+
+            shutil.rmtree(out)
+    try:
+        create_store(
+            out,
+            n_shards=cfg.sweep.n_runs,
+            samples_per_shard=cfg.samples_per_run,
+            shape=sample_shape(cfg),
+            arrays=array_dtypes(cfg),
+            params=store_param_specs(),
+            attrs=attrs,
+            overwrite=overwrite,
+        )
+    except OSError as exc:  # name the path the user gave, not the temporary one
+        if out != target:
+            import shutil
+
+            shutil.rmtree(out, ignore_errors=True)
+        raise OSError(exc.errno, exc.strerror, str(target)) from None
+    if out != target:
+        os.rename(out, target)
+    return shard_status(target)
 
 
 def store_param_specs() -> dict[str, Any]:
@@ -152,15 +188,26 @@ def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, An
     """
     from demseis.datasets import write_shard
 
-    cfg = parse_config(cfg_dict)
+    start = time.time()
     t0 = time.perf_counter()
+    cfg = parse_config(cfg_dict)
+    timings: dict[str, float] = {}
     try:
-        data = run_shard(cfg, shard)
+        data = run_shard(cfg, shard, timings=timings)
     except SimulationError as exc:
         return {"shard": shard, "error": f"SimulationError: {exc}"}
-    write_shard(store, shard, data.arrays, data.params, data.snapshots)
-    return {"shard": shard, "seconds": time.perf_counter() - t0,
-            "samples": int(data.arrays["seismic"].shape[0])}
+    t2 = time.perf_counter()
+    try:
+        write_shard(store, shard, data.arrays, data.params, data.snapshots)
+    except OSError as exc:  # disk full, read-only, permissions: retrying cannot help
+        return {"shard": shard, "os_error": describe_os_error(exc, store)}
+    t3 = time.perf_counter()
+    snapshot = np.asarray(data.params["snapshot"])
+    last = snapshot == snapshot.max()
+    return {"shard": shard, "seconds": t3 - t0, "samples": int(data.arrays["seismic"].shape[0]),
+            "no_fault": not bool(np.any(data.arrays["fault"][last])), "pid": os.getpid(),
+            "start": start, "end": time.time(), "dem_s": timings.get("dem_s", 0.0),
+            "render_s": timings.get("render_s", 0.0), "write_s": t3 - t2}
 
 
 def warm_numba_cache() -> None:
@@ -174,7 +221,8 @@ def warm_numba_cache() -> None:
 
     raw_cfg = load_config(preset="tiny").to_dict()
     raw_cfg["sweep"].update(n_runs=1, n_layers=2, throw_m=20.0, dip_deg=60.0)
-    raw_cfg["model"].update(n_snapshots=2, width_m=300.0, height_m=200.0)
+    # 1 m/s: the run outlasts one damping relaxation time (demseis.generator.physics)
+    raw_cfg["model"].update(n_snapshots=2, width_m=300.0, height_m=200.0, wall_speed_m_s=1.0)
     cfg = parse_config(raw_cfg)
     spec = plan_run(cfg, 0)
     snaps, info = simulate_run(cfg, spec)
@@ -276,7 +324,8 @@ def _run_sweep(
     t0 = time.perf_counter()
     remote = _connect(scheduler) if scheduler is not None else None  # fail before writing
     try:
-        status = prepare_store(cfg, out, overwrite=overwrite)
+        with _sigint_deferred():  # a store is created whole: Ctrl-C waits for the metadata
+            status = prepare_store(cfg, out, overwrite=overwrite)
     except BaseException:
         if remote is not None:
             remote.close()
@@ -284,6 +333,7 @@ def _run_sweep(
     pending = [int(i) for i in np.flatnonzero(status != 1)]
     summary = SweepSummary(store=str(out), n_shards=len(status), samples_per_shard=cfg.samples_per_run,
                            done_before=len(status) - len(pending))
+    summary.phase_seconds["prepare"] = time.perf_counter() - t0
     cfg_dict = cfg.to_dict()
     bar = _progress_bar(len(pending) * cfg.samples_per_run, progress)
     try:
@@ -293,24 +343,44 @@ def _run_sweep(
                 for shard in pending:
                     _account(summary, bar, shard_task(str(out), cfg_dict, shard))
                 summary.compute_seconds = time.perf_counter() - t_compute
+                summary.phase_seconds["compute"] = summary.compute_seconds
             else:
                 _run_distributed(str(out), cfg, pending, summary, bar, workers, remote, retries)
     finally:
         bar.close()
         if remote is not None and not pending:
             remote.close()
-    record_failures(out, summary.failed)
-    finalize_store(out)
+    t_fin = time.perf_counter()
+    with _sigint_deferred():
+        record_failures(out, summary.failed)
+        finalize_store(out)
+    summary.phase_seconds["finalize"] = time.perf_counter() - t_fin
     summary.seconds = time.perf_counter() - t0
     return summary
 
 
+def describe_os_error(exc: OSError, path: str | Path) -> str:
+    """``PATH: cause`` for a filesystem error (the path it names, else ``path``)."""
+    where = exc.filename if exc.filename is not None else path
+    return f"{where}: {exc.strerror or exc}"
+
+
 def _account(summary: SweepSummary, bar: Any, result: dict[str, Any]) -> None:
-    """Book one finished task's result (written shard, or a run recorded as failed)."""
+    """Book one finished task's result (written shard, or a run recorded as failed).
+
+    A shard that could not be written (disk full, read-only) stops the sweep with a
+    :class:`StoreError`: its done flag is not set, so the same command resumes it later.
+    """
+    if "os_error" in result:
+        raise StoreError(f"cannot write run {result['shard']}: {result['os_error']}; fix that "
+                         "(free space, permissions) and run the same command to resume")
     if "error" in result:
         summary.failed[result["shard"]] = result["error"]
     else:
+        summary.tasks.append(result)
         summary.completed.append(result["shard"])
+        if result.get("no_fault"):
+            summary.no_fault.append(result["shard"])
         bar.update(result["samples"])
 
 
@@ -326,42 +396,20 @@ def _connect(scheduler: str) -> Any:
 
 def _run_distributed(store: str, cfg: Config, pending: list[int], summary: SweepSummary,
                      bar: Any, workers: int | None, remote: Any, retries: int) -> None:
-    import dask
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import as_completed
 
     cluster = None
-    if remote is not None:
-        client = remote
-    else:
-        # warm the Numba cache while the worker processes start: tasks are submitted only
-        # after both, so no worker compiles a kernel the driver is compiling
-        import threading
-
-        warm_errors: list[BaseException] = []
-
-        def warm() -> None:
-            try:
-                warm_numba_cache()
-            except BaseException as exc:  # re-raised in the driver below
-                warm_errors.append(exc)
-
-        warmer = threading.Thread(target=warm, name="demseis-warm-numba")
-        warmer.start()
-        n = workers or os.cpu_count() or 1
-        env = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-               "OPENBLAS_NUM_THREADS": "1"}
-        os.environ.update(env)  # inherited by the spawned worker processes
-        with dask.config.set({"distributed.worker.daemon": False,
-                              "distributed.scheduler.allowed-failures": retries + 1}):
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, env=env, silence_logs=40)
-            client = Client(cluster)
-        warmer.join()
-        if warm_errors:
-            client.close()
-            cluster.close()
-            raise warm_errors[0]
+    t_start = time.perf_counter()
+    # Ctrl-C reaches the terminal's whole process group: the worker processes ignore it (see
+    # _start_local_cluster) and the driver closes the cluster in the ``finally`` below, so an
+    # interrupted sweep prints no worker traceback and leaks no semaphore.
+    client = None
     try:
+        if remote is not None:
+            client = remote
+        else:
+            client, cluster = _start_local_cluster(summary, workers, retries)
+        summary.phase_seconds["start"] = time.perf_counter() - t_start
         t_compute = time.perf_counter()
         # longest runs first (LPT): fewer workers idle at the end of a sweep of unequal runs
         cfg_dict = cfg.to_dict()
@@ -377,14 +425,151 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
                 exc = fut.exception()
                 summary.failed[shard_of[fut.key]] = f"{type(exc).__name__}: {exc}"
         summary.compute_seconds = time.perf_counter() - t_compute
+        summary.phase_seconds["compute"] = summary.compute_seconds
+    except BaseException:
+        _quiet_dask_logs()  # the scheduler would log the tasks cancelled by the shut-down
+        raise
     finally:
-        client.close()
+        t_close = time.perf_counter()
+        with _sigint_deferred():  # a second Ctrl-C does not cut the clean shut-down short
+            if client is not None:
+                client.close()
+            if cluster is not None:
+                cluster.close()
+        summary.phase_seconds["close"] = time.perf_counter() - t_close
+
+
+def _quiet_dask_logs() -> None:
+    """Only CRITICAL from dask's loggers in this process (an interrupted sweep shutting down)."""
+    import logging
+
+    for name in list(logging.root.manager.loggerDict):
+        if name == "distributed" or name.startswith("distributed."):
+            logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
+@contextlib.contextmanager
+def _sigint_deferred() -> Any:
+    """Hold SIGINT in the main thread for the block; one that arrived is raised at its end."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got: list[int] = []
+    old = signal.signal(signal.SIGINT, lambda signum, frame: got.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+    if got:
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def _sigint_ignored() -> Any:
+    """SIGINT ignored (SIG_IGN) for the block: processes spawned meanwhile inherit it."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _wait_spawned(n: int, timeout_s: float = 60.0) -> None:
+    """Wait until ``n`` worker processes (multiprocessing spawn children) exist."""
+    import psutil
+
+    me = psutil.Process()
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        found = 0
+        for child in me.children(recursive=True):
+            try:
+                found += "spawn_main" in " ".join(child.cmdline())
+            except (psutil.NoSuchProcess, psutil.ZombieProcess, psutil.AccessDenied):
+                continue
+        if found >= n:
+            return
+        time.sleep(0.01)
+
+
+def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: int) -> tuple[Any, Any]:
+    """A LocalCluster of single-threaded worker processes and its client, the Numba cache warm.
+
+    The cache is warmed in a thread while the worker processes start: tasks are submitted only
+    after both, so no worker compiles a kernel the driver is compiling.
+    """
+    import threading
+
+    import dask
+    from distributed import Client, LocalCluster
+
+    from demseis.generator._worker import IgnoreSigint
+
+    warm_errors: list[BaseException] = []
+
+    def warm() -> None:
+        t_warm = time.perf_counter()
+        try:
+            warm_numba_cache()
+            summary.phase_seconds["warm"] = time.perf_counter() - t_warm
+        except BaseException as exc:  # re-raised in the driver below
+            warm_errors.append(exc)
+
+    warmer = threading.Thread(target=warm, name="demseis-warm-numba")
+    warmer.start()
+    n = workers or os.cpu_count() or 1
+    env = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+           "OPENBLAS_NUM_THREADS": "1"}
+    os.environ.update(env)  # inherited by the spawned worker processes
+    cluster = client = None
+    try:
+        with dask.config.set({"distributed.worker.daemon": False,
+                              "distributed.scheduler.allowed-failures": retries + 1}):
+            # No dashboard; the scheduler's small HTTP server (health routes) on any free port:
+            # the default :8787 warns when another cluster holds it. Logs: CRITICAL only; task errors reach the
+            # driver through the futures and end up in the summary, and a worker cut off by an
+            # interrupted driver must not print tracebacks.
+            cluster = LocalCluster(n_workers=0, threads_per_worker=1, processes=True,
+                                   dashboard_address=":0",  # any free port: no warning
+                                   scheduler_kwargs={"dashboard": False}, env=env,
+                                   silence_logs=logging.CRITICAL)
+            client = Client(cluster)
+            client.register_plugin(IgnoreSigint())  # workers started later (restarts) too
+            # The workers are spawned with SIGINT ignored, so they ignore it from their first
+            # import on; the driver ignores it only for the ~0.1 s the spawns take.
+            with _sigint_ignored():
+                cluster.scale(n)
+                _wait_spawned(n)
+            # Tasks go out as soon as one worker is up (the others join as they start), and
+            # a worker killed while starting does not make the sweep wait for it for ever.
+            try:
+                client.wait_for_workers(1, timeout=120)
+            except TimeoutError:
+                raise InputError("no dask worker started within 120 s") from None
+        warmer.join()
+        if warm_errors:
+            raise warm_errors[0]
+    except BaseException:
+        warmer.join()
+        if client is not None:
+            client.close()
         if cluster is not None:
             cluster.close()
+        raise
+    return client, cluster
 
 
-def _progress_bar(total: int, enabled: bool) -> Any:
+def _progress_bar(total: int, enabled: bool, desc: str = "generate") -> Any:
     from tqdm import tqdm
 
-    return tqdm(total=total, unit="sample", desc="generate", disable=not enabled,
+    return tqdm(total=total, unit="sample", desc=desc, disable=not enabled,
                 file=sys.stderr, dynamic_ncols=True)

@@ -19,6 +19,7 @@ which. Coordinates: ``CDP_X``/``SourceX``/``GroupX`` hold the column x in metres
 from __future__ import annotations
 
 import os
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -69,9 +70,12 @@ def write_segy(section: np.ndarray, out: str | Path, *, x0_m: float, cell_m: flo
         "DEMSEIS SYNTHETIC SECTION (1-D CONVOLUTIONAL MODEL, ZERO-PHASE RICKER)",
         text_domain,
         f"TRACES = GRID COLUMNS, X0 {x0_m:g} M, CELL {cell_m:g} M, GRID TOP ELEVATION {top_m:g} M",
-        "X IN CDP_X/SOURCEX/GROUPX (SCALAR -100), CDP = CROSSLINE = COLUMN + 1, INLINE = 1",
+        "X IN CDP_X/SOURCEX/GROUPX (SCALAR -100)",
+        "CDP = CROSSLINE = COLUMN + 1, INLINE = 1",
         note.upper()[:76],
     ]
+    # a card is "C" + 2-digit number + space + 76 characters: longer lines would overflow
+    lines = [part for line in lines for part in (textwrap.wrap(line, 76) or [""])]
     try:
         with segyio.create(str(tmp), spec) as f:
             f.text[0] = segyio.tools.create_text_header(

@@ -289,10 +289,10 @@ def test_unstable_run_recorded_and_sweep_goes_on(tmp_path, monkeypatch, capsys):
 
     real = sweep.run_shard
 
-    def flaky(cfg, run, progress=None):
+    def flaky(cfg, run, progress=None, **kw):
         if run == 1:
             raise SimulationError("kinetic energy blew up at step 123")
-        return real(cfg, run, progress)
+        return real(cfg, run, progress, **kw)
 
     monkeypatch.setattr(sweep, "run_shard", flaky)
     out = tmp_path / "f.zarr"
@@ -301,6 +301,9 @@ def test_unstable_run_recorded_and_sweep_goes_on(tmp_path, monkeypatch, capsys):
     assert code == 1
     assert "1 written now, 1 failed" in text
     assert "run 1 failed: SimulationError: kinetic energy blew up at step 123" in text
+    # the same seed fails the same way: the summary says what to change, not "rerun"
+    assert "fails the same way" in text and "wall_speed_m_s" in text
+    assert "rerun the same command" not in text
     assert main(["info", str(out)]) == 0
     assert "run 1: SimulationError" in capsys.readouterr().out
     monkeypatch.setattr(sweep, "run_shard", real)

@@ -59,3 +59,18 @@ def test_export_errors(tiny_store, tmp_path, capsys):
     foreign = make_store(tmp_path / "foreign.zarr", data, grid, schema_version=99)
     with pytest.raises(StoreError, match="schema version"):
         export_segy(foreign, 0, tmp_path / "y.sgy")
+
+
+def test_text_header_cards_do_not_overflow(tmp_path):
+    """40 cards of 80 characters, each starting "C<nn> "; no line runs into the next card."""
+    sec = np.zeros((20, 3), np.float32)
+    out = write_segy(sec, tmp_path / "c.sgy", x0_m=0.0, cell_m=10.0, top_m=0.0,
+                     note="a note " * 20)
+    with segyio.open(str(out), ignore_geometry=True) as f:
+        text = bytes(f.text[0]).decode("ascii", "replace")
+    assert len(text) == 3200
+    cards = [text[i:i + 80] for i in range(0, 3200, 80)]
+    for k, card in enumerate(cards, start=1):
+        assert card.startswith(f"C{k:2d} "), (k, card)
+    assert any("CDP = CROSSLINE = COLUMN + 1" in c for c in cards)
+    assert any("SCALAR -100" in c for c in cards)

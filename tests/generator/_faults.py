@@ -1,0 +1,57 @@
+"""Helpers of the fault-injection tests: run the CLI in its own process group, interrupt it."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import zarr
+
+ROOT = Path(__file__).resolve().parents[2]
+INTERRUPTED = "demseis: interrupted; run the same command to resume"
+
+
+def spawn(args: list[str], env: dict[str, str] | None = None) -> subprocess.Popen:
+    """``python -m demseis ARGS`` in a new session (its own process group, like a terminal job)."""
+    return subprocess.Popen([sys.executable, "-m", "demseis", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True, cwd=ROOT,
+                            env=env)
+
+
+def done_shards(store: Path) -> int:
+    """Shards marked done so far (0 while the store does not exist yet)."""
+    try:
+        return int((zarr.open_array(str(store / "shard_done"), mode="r")[:] == 1).sum())
+    except Exception:
+        return 0
+
+
+def wait_for(pred, timeout_s: float = 240.0, proc: subprocess.Popen | None = None) -> bool:
+    """Poll ``pred()`` every 20 ms until it is true, the process ended, or the timeout."""
+    deadline = time.time() + timeout_s
+    while time.time() < deadline:
+        if pred():
+            return True
+        if proc is not None and proc.poll() is not None:
+            return False
+        time.sleep(0.02)
+    return False
+
+
+def interrupt(proc: subprocess.Popen, sig: int = signal.SIGINT) -> tuple[int, str, str]:
+    """Send ``sig`` to the whole process group (what Ctrl-C does); return (rc, stdout, stderr)."""
+    try:
+        os.killpg(proc.pid, sig)
+    except ProcessLookupError:
+        pass
+    try:
+        out, err = proc.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        out, err = proc.communicate()
+        raise AssertionError(f"did not exit within 120 s of the signal: {err[-2000:]}") from None
+    return proc.returncode, out, err

@@ -1,0 +1,88 @@
+"""Ctrl-C (SIGINT to the whole process group) during generate and render: exit 130, one line,
+no traceback, no leaked semaphore; running the same command again gives the same bytes as an
+uninterrupted run."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from tests.generator._faults import INTERRUPTED, ROOT, done_shards, interrupt, spawn, wait_for
+from tests.generator.test_generate import assert_same_bytes
+
+CFG = "[sweep]\nn_runs = 8\n"
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """The uninterrupted store of CFG (tiny preset, 8 runs) and its re-render."""
+    d = tmp_path_factory.mktemp("ref")
+    cfg = d / "c.toml"
+    cfg.write_text(CFG)
+    ref = d / "ref.zarr"
+    subprocess.run([sys.executable, "-m", "demseis", "generate", str(cfg), "--preset", "tiny",
+                    "--out", str(ref), "--workers", "0", "--quiet"], check=True, cwd=ROOT,
+                   capture_output=True)
+    rendered = d / "ref_r.zarr"
+    subprocess.run([sys.executable, "-m", "demseis", *_render_args(ref, rendered)], check=True,
+                   cwd=ROOT, capture_output=True)
+    return cfg, ref, rendered
+
+
+def _render_args(src, out) -> list[str]:
+    return ["render", str(src), "--freq", "10,20,30,40,50,60", "--snr", "inf,10,5", "--out",
+            str(out), "--quiet"]
+
+
+def _assert_clean_interrupt(rc: int, out: str, err: str) -> None:
+    assert rc == 130, (rc, err[-3000:])
+    assert err.strip() == INTERRUPTED, err[-3000:]
+    assert "Traceback" not in err and "leaked" not in err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("workers, when", [("2", "start-up"), ("2", "mid-sweep"), ("0", "mid-sweep")])
+def test_ctrl_c_generate_then_resume(reference, tmp_path, workers, when):
+    cfg, ref, _ = reference
+    out = tmp_path / "g.zarr"
+    args = ["generate", str(cfg), "--preset", "tiny", "--out", str(out), "--workers", workers, "--quiet"]
+    proc = spawn(args)
+    if when == "start-up":
+        # the store exists, the cluster is still starting (no shard done)
+        assert wait_for(lambda: (out / "zarr.json").exists(), proc=proc)
+    else:
+        assert wait_for(lambda: done_shards(out) >= 1, proc=proc), proc.communicate()[1][-2000:]
+    _assert_clean_interrupt(*interrupt(proc))
+    assert done_shards(out) < 8, "interrupt came after the sweep ended"
+    res = subprocess.run([sys.executable, "-m", "demseis", *args], cwd=ROOT, capture_output=True,
+                         text=True)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert_same_bytes(ref, out)
+
+
+@pytest.mark.slow
+def test_ctrl_c_render_then_resume(reference, tmp_path):
+    _, ref, rendered = reference
+    out = tmp_path / "r.zarr"
+    proc = spawn(_render_args(ref, out))
+    assert wait_for(lambda: done_shards(out) >= 1, proc=proc), proc.communicate()[1][-2000:]
+    _assert_clean_interrupt(*interrupt(proc))
+    res = subprocess.run([sys.executable, "-m", "demseis", *_render_args(ref, out)], cwd=ROOT,
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert_same_bytes(rendered, out)
+
+
+def test_render_progress_bar_is_labelled_render(tmp_path, capsys):
+    from demseis.cli import main
+
+    src = tmp_path / "t.zarr"
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[sweep]\nn_runs = 1\n")
+    assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(src), "--workers", "0", "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["render", str(src), "--freq", "20", "--out", str(tmp_path / "r.zarr")]) == 0
+    err = capsys.readouterr().err
+    assert "render:" in err and "generate" not in err

@@ -1,0 +1,85 @@
+"""kill -9 at random moments, 20+ trials: a dask worker (the sweep retries its task) or the
+driver with its whole process group (the store keeps every done shard; the same command
+resumes). After each trial a resume gives the bytes of an uninterrupted run."""
+
+from __future__ import annotations
+
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+
+import psutil
+import pytest
+
+from demseis.cli import main
+from tests.generator._faults import ROOT, spawn
+from tests.generator.test_generate import assert_same_bytes
+
+N_TRIALS = 20
+
+
+def _kill_a_worker(proc: subprocess.Popen, delay_s: float) -> bool:
+    """SIGKILL one worker process of the sweep ``delay_s`` after the first worker exists."""
+    driver = psutil.Process(proc.pid)
+    t_first = None
+    while proc.poll() is None:
+        workers = []
+        for p in driver.children(recursive=True):
+            try:
+                if "spawn_main" in " ".join(p.cmdline()):
+                    workers.append(p)
+            except (psutil.NoSuchProcess, psutil.ZombieProcess, psutil.AccessDenied):
+                continue
+        if workers:
+            t_first = t_first or time.time()
+            if time.time() - t_first >= delay_s:
+                try:
+                    workers[0].send_signal(signal.SIGKILL)
+                    return True
+                except psutil.NoSuchProcess:
+                    pass
+        time.sleep(0.02)
+    return False
+
+
+@pytest.mark.slow
+def test_kill9_worker_and_driver_at_random_moments(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[sweep]\nn_runs = 4\n")
+    ref = tmp_path / "ref.zarr"
+    assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(ref), "--workers", "0",
+                 "--quiet"]) == 0
+    rng = random.Random(14)
+    outcomes = []
+    for trial in range(N_TRIALS):
+        out = tmp_path / f"t{trial}.zarr"
+        target = ("worker", "driver", "driver-w0")[trial % 3]
+        workers = "0" if target == "driver-w0" else "2"
+        args = ["generate", str(cfg), "--preset", "tiny", "--out", str(out), "--workers", workers,
+                "--quiet"]
+        proc = spawn(args)
+        if target == "worker":
+            hit = _kill_a_worker(proc, rng.uniform(0.0, 3.0))
+            _, err = proc.communicate(timeout=300)
+            assert proc.returncode == 0, err[-2000:]  # the killed worker's task was retried
+        else:
+            time.sleep(rng.uniform(0.3, 6.0 if workers == "2" else 3.0))
+            hit = proc.poll() is None
+            try:
+                os.killpg(proc.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            proc.communicate(timeout=60)
+        outcomes.append((target, hit))
+        if out.exists():
+            assert main(["validate", str(out)]) in (0, 1, 2)  # an answer, never a crash
+        res = subprocess.run([sys.executable, "-m", "demseis", *args[:-3], "--workers", "0",
+                              "--quiet"], cwd=ROOT, capture_output=True, text=True)
+        assert res.returncode == 0, (trial, target, res.stderr[-2000:])
+        assert_same_bytes(ref, out)
+        assert main(["validate", str(out)]) == 0
+    # the kills must have landed while the sweep ran, most of the time
+    assert sum(hit for _, hit in outcomes) >= N_TRIALS // 2, outcomes

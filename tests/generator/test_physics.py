@@ -1,0 +1,78 @@
+"""Configs that cannot make a quasi-static fault are refused at load, with the reason."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from demseis.errors import ConfigError
+from demseis.generator.config import load_config, parse_config
+from demseis.generator.physics import MAX_WALL_MACH, p_wave_speed_m_s
+
+
+@pytest.mark.parametrize("preset", ["tiny", "quick", "seed"])
+def test_presets_pass(preset):
+    load_config(preset=preset)
+
+
+def test_examples_pass():
+    load_config("examples/readme.toml")
+
+
+@pytest.mark.parametrize("raw, words", [
+    ({"sweep": {"gravity_m_s2": 0.0}}, ["gravity_m_s2", "> 0"]),
+    ({"sweep": {"damping_scale": 0.0}}, ["damping_scale", "> 0", "elastic waves"]),
+    ({"sweep": {"friction": 0.0, "cohesion_n": 0.0}}, ["friction", "cohesion_n", "fluid"]),
+    ({"sweep": {"friction": {"dist": "uniform", "low": 0.0, "high": 0.5}, "cohesion_n": 0.0}},
+     ["friction down to 0", "fluid"]),
+    ({"model": {"wall_speed_m_s": 100.0}}, ["wall_speed_m_s", "quasi-static", "p-wave"]),
+    # the paper's damping: the hanging wall detached from its base (docs/dem.md)
+    ({"sweep": {"damping_scale": 3.0e9}}, ["damping_scale", "detaches"]),
+    # 1 m of throw at 5 m/s is over before the heaviest element's energy has relaxed
+    ({"sweep": {"throw_m": 1.0, "dip_deg": 45.0}}, ["damping_scale", "dynamic", "throw"]),
+])
+def test_degenerate_physics_refused(raw, words):
+    with pytest.raises(ConfigError) as exc:
+        parse_config(raw)
+    msg = str(exc.value)
+    for w in words:
+        assert w in msg, msg
+
+
+def test_cohesion_alone_or_friction_alone_can_fault():
+    """Measured (quick model): friction 0 with the default cohesion, and cohesion 0 with friction
+    0.05, both localise a fault; so each is accepted alone."""
+    parse_config({"sweep": {"friction": 0.0}})
+    parse_config({"sweep": {"cohesion_n": 0.0, "friction": 0.05}})
+
+
+def test_wall_speed_bound_is_the_p_wave_fraction():
+    c = p_wave_speed_m_s(1.0e10, 2500.0)
+    assert c == pytest.approx(2 * math.sqrt(1e10 / (math.pi * 2500)))
+    # independent check: a chain of disks of radius r, spacing 2r, spring Kn: c = 2r sqrt(Kn/m)
+    r = 17.0
+    assert c == pytest.approx(2 * r * math.sqrt(1e10 / (2500 * math.pi * r * r)))
+    v_max = MAX_WALL_MACH * c
+    damp = {"damping_scale": 1.0e8}  # so that the hanging wall can follow this fast a base
+    parse_config({"model": {"wall_speed_m_s": 0.99 * v_max}, "sweep": damp})
+    with pytest.raises(ConfigError, match="quasi-static"):
+        parse_config({"model": {"wall_speed_m_s": 1.01 * v_max}, "sweep": damp})
+
+
+def test_run_without_fault_is_recorded(tmp_path, capsys):
+    """A run whose last snapshot has no fault pixel is named in the sweep summary."""
+    from demseis.cli import main
+
+    cfg = tmp_path / "c.toml"
+    # 4 m of throw (slowly, to stay quasi-static) is below the labels' minimum slip: no fault
+    cfg.write_text("[sweep]\nn_runs = 1\nthrow_m = 4.0\ndip_deg = 60\n[model]\nwall_speed_m_s = 0.4\n")
+    out = tmp_path / "nf.zarr"
+    assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(out), "--workers", "0",
+                 "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "1 run(s) ended with no fault" in text and ": 0" in text
+    import zarr
+
+    assert not np.any(zarr.open_group(str(out), mode="r")["fault"][:])
