@@ -39,7 +39,13 @@ def test_tiny_store_contents(tiny_store):
     assert np.abs(s).max() > 0
     snap = root["params/snapshot"][:]
     f = fault[:].reshape(n, -1).sum(axis=1)
-    assert np.all(f[snap > 0] > 0), "fault mask empty in a sample taken after faulting"
+    # slip-trace labels need a measured jump >= min_slip_m, so a faulted snapshot can hold none:
+    # run 1 of `tiny` (60 deg) has a 55 m trace at 50 m throw and none at 100 m, where its shear
+    # zone is wider than the jump window (a known limit, docs/labels.md). has_fault says which.
+    assert np.array_equal(root["params/has_fault"][:], (f > 0).astype(np.uint8))
+    run = root["params/run_id"][:]
+    for r in np.unique(run):
+        assert f[(run == r) & (snap > 0)].max() > 0, f"run {r}: no fault in any faulted snapshot"
     assert np.all(f[snap == 0] == 0), "fault mask non-empty before any faulting"
     assert set(np.unique(root["damage"][:])) <= {0, 1, 2}
 
