@@ -158,7 +158,7 @@ def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, An
         data = run_shard(cfg, shard)
     except SimulationError as exc:
         return {"shard": shard, "error": f"SimulationError: {exc}"}
-    write_shard(store, shard, data.arrays, data.params, data.snapshots)
+    write_shard(store, shard, data.arrays, data.params, data.snapshots or None)
     return {"shard": shard, "seconds": time.perf_counter() - t0,
             "samples": int(data.arrays["seismic"].shape[0])}
 
