@@ -152,6 +152,11 @@ def matrix(cells: list[dict], config: str) -> dict:
     return summary
 
 
+def example_index(truth) -> int:
+    """The test sample drawn in the figure: the one with the most fault pixels."""
+    return int(np.argmax([np.count_nonzero(t) for t in truth]))
+
+
 def draw(path: Path, examples: dict, sets: dict) -> None:
     """Rows: training sets; columns: test sets; seismic, truth (green) and prediction (red)."""
     import matplotlib
@@ -166,7 +171,8 @@ def draw(path: Path, examples: dict, sets: dict) -> None:
     for i, tr in enumerate(trains):
         for j, te in enumerate(tests):
             ax = axes[i, j]
-            sec, truth = sets[te][0][0], sets[te][1][0]
+            k = example_index(sets[te][1])
+            sec, truth = sets[te][0][k], sets[te][1][k]
             prob = examples[tr][te]
             ax.imshow(sec, cmap="gray", aspect="auto")
             ax.imshow(np.ma.masked_less(prob, 0.5), cmap="autumn", alpha=0.8, aspect="auto",
@@ -238,7 +244,7 @@ def main(argv: list[str] | None = None) -> int:
                 results["cells"].append({"config": config, "train": tr, "test": te,
                                          "seed": seed, "train_seconds": info["seconds"],
                                          "steps": info["steps"], **scores})
-                examples.setdefault(tr, {})[te] = probs[0]
+                examples.setdefault(tr, {})[te] = probs[example_index(truth)]
             save_results(path, results)  # after every cell: an interrupted run loses one cell
     summary = matrix(results["cells"], config)
     results.setdefault("summaries", {})[config] = summary
