@@ -895,18 +895,9 @@ def write_shard(
         # zarr merges a write into an existing shard file (it reads its index first), so a
         # damaged old shard would make the rewrite fail: remove it, the shard is not done
         (Path(path) / name / "c" / str(k) / "0" / "0").unlink(missing_ok=True)
-    # the ~100 small files of a shard are written concurrently (each write is one file; zarr's
-    # event loop overlaps their I/O); all finish, or the first error propagates, before the
-    # done flag is set
-    params_group = group["params"]
-    jobs = [(lambda n=name: _write_array(group[n], sel, data[n])) for name in layout.arrays]
-    jobs += [(lambda n=name: _write_array(params_group[n], sel, pdata[n]))
-             for name in layout.params]
-    from concurrent.futures import ThreadPoolExecutor
-
-    with ThreadPoolExecutor(max_workers=8) as pool:
-        for future in [pool.submit(job) for job in jobs]:
-            future.result()
+        _write_array(group[name], sel, data[name])
+    for name in layout.params:
+        _write_array(group["params"][name], sel, pdata[name])
     if particles is not None:
         write_particles(path, run_id, particles)
     done[k] = 1
