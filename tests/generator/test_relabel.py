@@ -1,0 +1,33 @@
+"""``demseis relabel``: new labels from the stored particle snapshots, same seismic bytes."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from demseis.cli import main
+
+
+def test_relabel_keeps_seismic_bytes_and_changes_labels(tmp_path):
+    import zarr
+
+    src, dst = tmp_path / "t.zarr", tmp_path / "l.zarr"
+    assert main(["generate", "--preset", "tiny", "--out", str(src), "--workers", "0",
+                 "--quiet"]) == 0
+    labels = tmp_path / "old.toml"
+    labels.write_text('[labels]\nmethod = "strain_band"\n')
+    assert main(["relabel", str(src), "--labels", str(labels), "--out", str(dst),
+                 "--quiet"]) == 0
+    a, b = zarr.open(str(src), mode="r"), zarr.open(str(dst), mode="r")
+    np.testing.assert_array_equal(a["seismic"][:].view(np.uint32),
+                                  b["seismic"][:].view(np.uint32))
+    assert a["params/has_fault"][:].sum() > 0
+    assert (a["slip_m"][:] > 0).any() and not (b["slip_m"][:] > 0).any()  # legacy: no slip
+    assert main(["validate", str(dst)]) == 0
+
+
+def test_relabel_rejects_a_bad_labels_file(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[sweep]\nn_runs = 3\n")
+    assert main(["relabel", str(tmp_path / "none.zarr"), "--labels", str(bad), "--out",
+                 str(tmp_path / "o.zarr")]) == 2
+    assert "only a [labels] table" in capsys.readouterr().err
