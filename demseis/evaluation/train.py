@@ -89,7 +89,9 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
                device: str | None = None, where: Mapping[str, Any] | Callable | None = None,
                split_fractions: tuple[float, float, float] = (0.8, 0.1, 0.1),
                log: Callable[[str], None] | None = print, augment: bool = False,
-               amp: bool | None = None) -> tuple[Any, dict[str, Any]]:
+               amp: bool | None = None, val_every: int | None = None, patience: int = 5,
+               checkpoint: str | None = None,
+               progress: bool = False) -> tuple[Any, dict[str, Any]]:
     """Train :func:`build_unet` on random crops of a store's ``split``.
 
     Parameters
@@ -100,6 +102,12 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     augment : random left-right flips, polarity flips and amplitude scaling (x 0.5 .. 2) of
         each training crop.
     amp : CUDA mixed precision (autocast + gradient scaling); None = on when on CUDA.
+    val_every : every this many steps, score whole sections of the ``val`` split (runs held
+        out of training, of every store) at tolerance 2 px (F1 at threshold 0.5); keep the
+        best model, write it to ``checkpoint`` (``torch.save`` of the state dict, when given),
+        and stop after ``patience`` evaluations without improvement. The returned model is the
+        best one. None: no validation.
+    progress : a progress bar on stderr (tqdm).
     steps : optimiser steps (exactly this many), or
     minutes : a wall-clock budget instead (the number of steps then depends on the machine).
     split, where, split_fractions : which samples (see :class:`FaultSegDataset`).
@@ -160,8 +168,34 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     t0, step, epoch, losses = time.perf_counter(), 0, 0, []
     budget = None if minutes is None else 60.0 * float(minutes)
 
+    val = _validation_set(stores, target, split_fractions) if val_every else None
+    best = {"f1": -1.0, "step": 0, "state": None, "bad": 0, "history": []}
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=steps, unit="step", desc="train")
+
     def done() -> bool:
+        if best["bad"] >= patience:
+            return True
         return step >= steps if steps is not None else time.perf_counter() - t0 >= budget
+
+    def validate() -> None:
+        from demseis.evaluation import score
+
+        prob = predict_sections(model, val[0], device=str(dev))
+        f1 = float(score(prob, val[1], threshold=0.5, tolerance_px=2).f1)
+        best["history"].append((step, round(f1, 4)))
+        if f1 > best["f1"]:
+            best.update(f1=f1, step=step, bad=0,
+                        state={k: v.detach().clone() for k, v in model.state_dict().items()})
+            if checkpoint:
+                torch.save(best["state"], checkpoint)
+        else:
+            best["bad"] += 1
+        if log:
+            log(f"  step {step:5d}  val F1@2 {f1:.4f}  best {best['f1']:.4f} (step {best['step']})")
 
     if log:
         log(f"train: {len(ds)} samples ({len(np.unique(ds.run_ids))} runs), crop {crop}, "
@@ -187,21 +221,52 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
             scaler.update()
             losses.append(float(loss.detach()))
             step += 1
+            if bar is not None:
+                bar.update(1)
+                bar.set_postfix(loss=f"{losses[-1]:.3f}")
+            if val is not None and step % int(val_every) == 0:
+                validate()
+                model.train()
             if log and step % 50 == 0:
                 log(f"  step {step:5d}  epoch {epoch:3d}  loss {np.mean(losses[-50:]):.4f}  "
                     f"{time.perf_counter() - t0:6.0f} s")
             if done():
                 break
         epoch += 1
+    if bar is not None:
+        bar.close()
+    if val is not None and best["state"] is not None:
+        model.load_state_dict(best["state"])
     info = {"steps": step, "epochs": epoch, "seconds": round(time.perf_counter() - t0, 1),
             "final_loss": float(np.mean(losses[-50:])) if losses else float("nan"),
             "pos_weight": round(float(pos_weight), 2), "n_samples": len(ds),
             "n_runs": int(len(np.unique(ds.run_ids))), "device": str(dev), "amp": use_amp,
             "augment": bool(augment)}
+    if val is not None:
+        info.update(best_val_f1=round(best["f1"], 4), best_step=best["step"],
+                    stopped_early=best["bad"] >= patience, val_history=best["history"])
     if log:
         log(f"trained {step} steps ({epoch} epochs) in {info['seconds']:.0f} s, "
             f"final loss {info['final_loss']:.4f}")
     return model, info
+
+
+def _validation_set(stores: list, target: str,
+                    split_fractions: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Whole sections and 0/1 truth of the ``val`` split of every store (runs, not samples)."""
+    from demseis.datasets import FaultSegDataset
+
+    xs, ys = [], []
+    for s in stores:
+        ds = FaultSegDataset(s, inputs=("seismic",), targets=(target,), split="val",
+                             split_fractions=split_fractions)
+        for i in range(len(ds)):
+            x, y = ds[i]
+            xs.append(x[0].numpy())
+            ys.append(y.numpy() > 0)
+    if not xs:
+        raise InputError("val_every: the val split is empty (give split_fractions a val share)")
+    return np.stack(xs), np.stack(ys)
 
 
 class _Mixed:

@@ -102,3 +102,29 @@ def test_mixed_training_draws_from_both_stores(stores):
     assert info["n_runs"] == 2 * one["n_runs"]
     assert info["amp"] is False  # AMP is CUDA only
     assert info["augment"] is True
+
+
+def test_validation_keeps_the_best_model_and_stops_early(stores, tmp_path):
+    import torch
+
+    from demseis.evaluation.train import build_unet, train_unet
+
+    _, kin, _ = stores
+    ckpt = tmp_path / "best.pt"
+    model, info = train_unet(kin, steps=12, crop=32, batch=2, base=4, threads=1, device="cpu",
+                             log=None, split_fractions=(0.5, 0.5, 0.0), val_every=2,
+                             patience=2, checkpoint=str(ckpt), progress=True)
+    hist = info["val_history"]
+    assert [s for s, _ in hist] == list(range(2, info["steps"] + 1, 2))
+    assert info["best_val_f1"] == max(f for _, f in hist)
+    assert info["best_step"] in [s for s, f in hist if f == info["best_val_f1"]]
+    assert info["stopped_early"] == (info["steps"] < 12)
+    if info["stopped_early"]:  # two evaluations in a row without improvement
+        assert all(f <= info["best_val_f1"] for _, f in hist[-2:]) and hist[-1][0] - 4 >= 0
+    saved = build_unet(4)
+    saved.load_state_dict(torch.load(ckpt))
+    for k, v in model.state_dict().items():  # the returned model is the best (checkpointed) one
+        assert torch.equal(v, saved.state_dict()[k]), k
+    with pytest.raises(InputError, match="val split is empty"):
+        train_unet(kin, steps=1, crop=32, batch=2, base=4, device="cpu", log=None,
+                   split_fractions=(1.0, 0.0, 0.0), val_every=1)
