@@ -184,6 +184,15 @@ _DECLARED: tuple[Param, ...] = (
     _p("strength_contrast", float, "run", 1.0, 1.0, 16.0,
        doc="mechanical stratigraphy: cohesion ratio of strong (sandstone, limestone) to weak "
            "(shale) layers; 1 = uniform mechanics (demseis.dem.strata)"),
+    # ---- per run: the kinematic engine only ([model] engine = "kinematic") ----------------
+    _p("fold_amplitude_m", float, "run", 0.0, 0.0, 1.0e4, unit="m",
+       doc="kinematic engine: amplitude of the folding of the layers before faulting (0 = flat)"),
+    _p("fold_kind", str, "run", "gaussian", choices=("gaussian", "sinusoidal"),
+       doc="kinematic engine: folds as a sum of 1-4 Gaussian bumps, or one sinusoid"),
+    _p("throw_taper", float, "run", 0.5, 0.0, 1.0,
+       doc="kinematic engine: how far the throw dies out along the fault: throw(s) = throw_m "
+           "(1 - taper (s/L)^2) at distance s from the fault's centre of half-length L "
+           "(0 = constant throw, 1 = zero at the tips)"),
     # ---- per run: layering ---------------------------------------------------------------
     _p("n_layers", int, "run", 48, 1, 250, doc="number of pre-kinematic layers"),
     _p("layer_thickness_cv", float, "run", 0.0, 0.0, 0.9,
@@ -237,6 +246,10 @@ _DECLARED: tuple[Param, ...] = (
        doc="smallest element radius (radii log-uniform in [min, max])"),
     _p("radius_max_m", float, "sweep", 25.0, 0.1, 1.0e3, unit="m", section="model",
        doc="largest element radius"),
+    _p("engine", str, "sweep", "dem", choices=("dem", "kinematic"), section="model",
+       doc="dem: grow faults in the DEM; kinematic: a FaultSeg-style generator (random "
+           "layered reflectivity, optional folds, planar or listric faults displaced "
+           "geometrically; no particles, >= 20x faster; demseis.generator.kinematic)"),
     _p("n_snapshots", int, "sweep", 4, 2, 1000, section="model",
        doc="snapshots per run, equally spaced in throw; the first is the undeformed reference"),
     _p("sedimentation", bool, "sweep", True, section="model",

@@ -15,6 +15,7 @@ from demseis.types import Snapshot
 from demseis.errors import ConfigError, InputError
 from demseis.generator.config import PRESETS, Config, load_config, parse_config
 from demseis.generator.pipeline import (
+    require_particles,
     grid_of,
     property_model_of,
     run_info,
@@ -31,6 +32,7 @@ def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot], dict[st
 
         root = open_store(path)
         cfg = parse_config(dict(root.attrs)["config"], source=str(path))
+        require_particles(cfg, "preview")
         if run >= cfg.sweep.n_runs:
             raise InputError(f"--run {run}: the store has runs 0..{cfg.sweep.n_runs - 1}")
         if shard_status(path)[run] != 1:
@@ -47,6 +49,7 @@ def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot], dict[st
         raise ConfigError(f"{source!r} is neither a config file, a preset ({', '.join(PRESETS)}) nor a store")
     if run >= cfg.sweep.n_runs:
         raise InputError(f"--run {run}: the config has runs 0..{cfg.sweep.n_runs - 1}")
+    require_particles(cfg, "preview")
     snaps, info = simulate_run(cfg, plan_run(cfg, run))
     return cfg, snaps, info
 

@@ -10,7 +10,10 @@ What it does:
    :func:`demseis.evaluation.train.train_unet`, shared with ``benchmarks/learnability.py``) on
    random crops of the ``train`` split of the store (seismic in, fault mask out) with
    binary cross-entropy (positive weight = background/fault pixel ratio, capped at 50) plus soft
-   Dice, Adam, for a wall-clock budget;
+   Dice, Adam, for a wall-clock budget, with augmentation (left-right and polarity flips,
+   amplitude scaling, random crops) and a progress bar; every ``--val-every`` steps it scores
+   the ``val`` split (runs never trained on) and keeps the best model by validation F1
+   (checkpointed to ``unet.pt``), stopping after ``--patience`` evaluations without gain;
 2. predicts fault probabilities on the whole sections of the ``test`` split (DEM runs never seen
    in training) and writes ``unet_test.npy`` with ``test_indices.npy`` (store index of each row);
 3. runs the no-learning baseline (``--baseline-method``, default ``dip``: coherence-weighted
@@ -40,7 +43,10 @@ def train(args: argparse.Namespace) -> tuple[object, dict]:
     from demseis.evaluation.train import train_unet
 
     return train_unet(args.store, minutes=args.minutes, crop=args.crop, batch=args.batch,
-                      base=args.base, lr=args.lr, seed=args.seed, threads=args.threads)
+                      base=args.base, lr=args.lr, seed=args.seed, threads=args.threads,
+                      augment=not args.no_augment, val_every=args.val_every or None,
+                      patience=args.patience, checkpoint=os.path.join(args.out_dir, "unet.pt"),
+                      progress=True, log=None)
 
 
 def run_score(pred: str, store, indices: np.ndarray, tolerance: float, by: str,
@@ -74,6 +80,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tolerance", type=float, default=2.0, help="scoring tolerance in pixels")
     ap.add_argument("--by", default="freq_hz,snr_db,dip_deg", help="scoring breakdown")
     ap.add_argument("--bins", type=int, default=3, help="bins of drawn parameters (dip)")
+    ap.add_argument("--val-every", type=int, default=50,
+                    help="steps between validation scores (0 = no validation)")
+    ap.add_argument("--patience", type=int, default=5, help="validations without gain to stop")
+    ap.add_argument("--no-augment", action="store_true", help="no flips / amplitude scaling")
     ap.add_argument("--baseline-method", choices=("dip", "semblance"), default="dip")
     args = ap.parse_args(argv)
 
@@ -84,8 +94,11 @@ def main(argv: list[str] | None = None) -> int:
     from demseis.evaluation.train import predict_sections
 
     os.makedirs(args.out_dir, exist_ok=True)
-    model, _ = train(args)
-    torch.save(model.state_dict(), os.path.join(args.out_dir, "unet.pt"))
+    model, info = train(args)
+    torch.save(model.state_dict(), os.path.join(args.out_dir, "unet.pt"))  # the best model
+    if "best_val_f1" in info:
+        print(f"best val F1@2 {info['best_val_f1']:.4f} at step {info['best_step']} of "
+              f"{info['steps']}" + (" (stopped early)" if info["stopped_early"] else ""))
 
     store = demseis.open(args.store)
     test = store.torch_dataset(inputs=("seismic",), targets=("fault",), split="test")

@@ -88,12 +88,26 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
                base: int = 16, lr: float = 2e-3, seed: int = 0, threads: int | None = None,
                device: str | None = None, where: Mapping[str, Any] | Callable | None = None,
                split_fractions: tuple[float, float, float] = (0.8, 0.1, 0.1),
-               log: Callable[[str], None] | None = print) -> tuple[Any, dict[str, Any]]:
+               log: Callable[[str], None] | None = print, augment: bool = False,
+               amp: bool | None = None, val_every: int | None = None, patience: int = 5,
+               checkpoint: str | None = None,
+               progress: bool = False) -> tuple[Any, dict[str, Any]]:
     """Train :func:`build_unet` on random crops of a store's ``split``.
 
     Parameters
     ----------
-    store : a store path (or what :class:`demseis.datasets.FaultSegDataset` accepts).
+    store : a store path (or what :class:`demseis.datasets.FaultSegDataset` accepts), or a
+        list of them: the training set is then their ``split`` samples, drawn so that each
+        store gives the same share of every batch on average (a mix).
+    augment : random left-right flips, polarity flips and amplitude scaling (x 0.5 .. 2) of
+        each training crop.
+    amp : CUDA mixed precision (autocast + gradient scaling); None = on when on CUDA.
+    val_every : every this many steps, score whole sections of the ``val`` split (runs held
+        out of training, of every store) at tolerance 2 px (F1 at threshold 0.5); keep the
+        best model, write it to ``checkpoint`` (``torch.save`` of the state dict, when given),
+        and stop after ``patience`` evaluations without improvement. The returned model is the
+        best one. None: no validation.
+    progress : a progress bar on stderr (tqdm).
     steps : optimiser steps (exactly this many), or
     minutes : a wall-clock budget instead (the number of steps then depends on the machine).
     split, where, split_fractions : which samples (see :class:`FaultSegDataset`).
@@ -122,16 +136,29 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     if threads:
         torch.set_num_threads(int(threads))
     dev = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
-    ds = FaultSegDataset(store, inputs=("seismic",), targets=(target,), split=split,
-                         crop=(crop, crop), seed=seed, where=where,
-                         split_fractions=split_fractions)
-    if len(ds) == 0:
-        raise InputError(f"the {split} split of the store is empty")
-    h, w = ds.layout.shape
-    if crop > min(h, w) or crop % 4:
-        raise InputError(f"crop = {crop}; allowed: a multiple of 4, at most {min(h, w)}")
+    stores = list(store) if isinstance(store, (list, tuple)) else [store]
+    parts = [FaultSegDataset(s, inputs=("seismic",), targets=(target,), split=split,
+                             crop=(crop, crop), seed=seed, where=where,
+                             split_fractions=split_fractions) for s in stores]
+    for s, part in zip(stores, parts):
+        if len(part) == 0:
+            raise InputError(f"the {split} split of store {str(s)!r} is empty")
+        h, w = part.layout.shape
+        if crop > min(h, w) or crop % 4:
+            raise InputError(f"crop = {crop}; allowed: a multiple of 4, at most {min(h, w)}")
     gen = torch.Generator().manual_seed(seed)
-    loader = DataLoader(ds, batch_size=batch, shuffle=True, generator=gen, drop_last=False)
+    if len(parts) == 1:
+        ds = parts[0]
+        loader = DataLoader(ds, batch_size=batch, shuffle=True, generator=gen, drop_last=False)
+    else:
+        from torch.utils.data import ConcatDataset, WeightedRandomSampler
+
+        ds = _Mixed(parts, ConcatDataset(parts))
+        weights = torch.cat([torch.full((len(p),), 1.0 / len(p)) for p in parts])
+        sampler = WeightedRandomSampler(weights, num_samples=len(ds), generator=gen)
+        loader = DataLoader(ds.concat, batch_size=batch, sampler=sampler, drop_last=False)
+    use_amp = (dev.type == "cuda") if amp is None else bool(amp and dev.type == "cuda")
+    scaler = torch.amp.GradScaler("cuda", enabled=use_amp)
     # fault pixels are rare: weight them by the background / fault ratio of a few batches
     frac = np.mean([float((y > 0).float().mean()) for _, (_, y) in zip(range(8), loader)])
     pos_weight = torch.tensor(min((1 - frac) / max(frac, 1e-6), 50.0), device=dev)
@@ -141,8 +168,34 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     t0, step, epoch, losses = time.perf_counter(), 0, 0, []
     budget = None if minutes is None else 60.0 * float(minutes)
 
+    val = _validation_set(stores, target, split_fractions) if val_every else None
+    best = {"f1": -1.0, "step": 0, "state": None, "bad": 0, "history": []}
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=steps, unit="step", desc="train")
+
     def done() -> bool:
+        if best["bad"] >= patience:
+            return True
         return step >= steps if steps is not None else time.perf_counter() - t0 >= budget
+
+    def validate() -> None:
+        from demseis.evaluation import score
+
+        prob = predict_sections(model, val[0], device=str(dev))
+        f1 = float(score(prob, val[1], threshold=0.5, tolerance_px=2).f1)
+        best["history"].append((step, round(f1, 4)))
+        if f1 > best["f1"]:
+            best.update(f1=f1, step=step, bad=0,
+                        state={k: v.detach().clone() for k, v in model.state_dict().items()})
+            if checkpoint:
+                torch.save(best["state"], checkpoint)
+        else:
+            best["bad"] += 1
+        if log:
+            log(f"  step {step:5d}  val F1@2 {f1:.4f}  best {best['f1']:.4f} (step {best['step']})")
 
     if log:
         log(f"train: {len(ds)} samples ({len(np.unique(ds.run_ids))} runs), crop {crop}, "
@@ -154,26 +207,95 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         for x, y in loader:
             x = x.to(dev)
             y = (y > 0).float()[:, None].to(dev)
-            logits = model(x)
+            if augment:
+                x, y = _augment(x, y, gen)
+            with torch.autocast(dev.type, enabled=use_amp):
+                logits = model(x)
+            logits = logits.float()
             p = torch.sigmoid(logits)
             dice = 1 - (2 * (p * y).sum() + 1) / (p.sum() + y.sum() + 1)
             loss = bce(logits, y) + dice
             opt.zero_grad()
-            loss.backward()
-            opt.step()
+            scaler.scale(loss).backward()
+            scaler.step(opt)
+            scaler.update()
             losses.append(float(loss.detach()))
             step += 1
+            if bar is not None:
+                bar.update(1)
+                bar.set_postfix(loss=f"{losses[-1]:.3f}")
+            if val is not None and step % int(val_every) == 0:
+                validate()
+                model.train()
             if log and step % 50 == 0:
                 log(f"  step {step:5d}  epoch {epoch:3d}  loss {np.mean(losses[-50:]):.4f}  "
                     f"{time.perf_counter() - t0:6.0f} s")
             if done():
                 break
         epoch += 1
+    if bar is not None:
+        bar.close()
+    if val is not None and best["state"] is not None:
+        model.load_state_dict(best["state"])
     info = {"steps": step, "epochs": epoch, "seconds": round(time.perf_counter() - t0, 1),
             "final_loss": float(np.mean(losses[-50:])) if losses else float("nan"),
             "pos_weight": round(float(pos_weight), 2), "n_samples": len(ds),
-            "n_runs": int(len(np.unique(ds.run_ids))), "device": str(dev)}
+            "n_runs": int(len(np.unique(ds.run_ids))), "device": str(dev), "amp": use_amp,
+            "augment": bool(augment)}
+    if val is not None:
+        info.update(best_val_f1=round(best["f1"], 4), best_step=best["step"],
+                    stopped_early=best["bad"] >= patience, val_history=best["history"])
     if log:
         log(f"trained {step} steps ({epoch} epochs) in {info['seconds']:.0f} s, "
             f"final loss {info['final_loss']:.4f}")
     return model, info
+
+
+def _validation_set(stores: list, target: str,
+                    split_fractions: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Whole sections and 0/1 truth of the ``val`` split of every store (runs, not samples)."""
+    from demseis.datasets import FaultSegDataset
+
+    xs, ys = [], []
+    for s in stores:
+        ds = FaultSegDataset(s, inputs=("seismic",), targets=(target,), split="val",
+                             split_fractions=split_fractions)
+        for i in range(len(ds)):
+            x, y = ds[i]
+            xs.append(x[0].numpy())
+            ys.append(y.numpy() > 0)
+    if not xs:
+        raise InputError("val_every: the val split is empty (give split_fractions a val share)")
+    return np.stack(xs), np.stack(ys)
+
+
+class _Mixed:
+    """Several FaultSegDatasets trained on together (``len``, ``run_ids``, ``set_epoch``)."""
+
+    def __init__(self, parts: list, concat: Any) -> None:
+        self.parts, self.concat = parts, concat
+        # run ids of different stores are different runs: offset them
+        offsets = np.cumsum([0] + [int(np.max(p.run_ids)) + 1 for p in parts[:-1]])
+        self.run_ids = np.concatenate([p.run_ids + o for p, o in zip(parts, offsets)])
+
+    def __len__(self) -> int:
+        return len(self.concat)
+
+    def set_epoch(self, epoch: int) -> None:
+        for p in self.parts:
+            p.set_epoch(epoch)
+
+
+def _augment(x: Any, y: Any, gen: Any) -> tuple[Any, Any]:
+    """Per-crop left-right flip, polarity flip and amplitude scaling (x 0.5 .. 2)."""
+    import torch
+
+    n = x.shape[0]
+    flip = torch.rand(n, generator=gen) < 0.5
+    if flip.any():
+        idx = flip.nonzero()[:, 0].to(x.device)
+        x[idx] = torch.flip(x[idx], dims=[-1])
+        y[idx] = torch.flip(y[idx], dims=[-1])
+    sign = torch.where(torch.rand(n, generator=gen) < 0.5, -1.0, 1.0)
+    scale = sign * torch.exp(torch.empty(n).uniform_(np.log(0.5), np.log(2.0), generator=gen))
+    return x * scale.to(x.device, x.dtype)[:, None, None, None], y

@@ -41,6 +41,7 @@ PARAM_CODES: dict[str, tuple[str, ...]] = {
     "imaging": ("1d", "psf"),
     "structure": PARAMS["structure"].choices,
     "fault_kind": PARAMS["fault_kind"].choices,
+    "fold_kind": PARAMS["fold_kind"].choices,
 }
 
 #: value of every ``fault<k>_*`` record of a fault a run does not have (the store holds no
@@ -269,15 +270,8 @@ class ShardData:
 def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict[str, Any]) -> ShardData:
     """Sections and labels of every render of ``spec`` from its snapshots."""
     from demseis.labels import label_maps, strain_history
-    from demseis.labels.maps import sample_facts
     from demseis.labels.traces import displacement_history
-    from demseis.seismic import (
-        add_noise,
-        depth_to_time,
-        element_properties,
-        imaged_sections,
-        property_grids,
-    )
+    from demseis.seismic import element_properties, property_grids
 
     grid = grid_of(cfg)
     p = spec.params
@@ -288,65 +282,92 @@ def render_run(cfg: Config, spec: RunSpec, snapshots: list[Snapshot], info: dict
     disp = displacement_history(snapshots) if cfg.labels.method == "slip_trace" \
         else [None] * len(snapshots)
 
-    dtypes = array_dtypes(cfg)
-    S = len(spec.renders)
-    t_s = time_axis_of(cfg)
-    arrays = {k: np.zeros((S, *sample_shape(cfg)), dtype=v) for k, v in dtypes.items()}
-    pdt = param_dtypes()
-    params = {k: np.zeros(S, dtype=v) for k, v in pdt.items()}
-
-    by_snap: dict[int, list] = {}
-    for r in spec.renders:
-        by_snap.setdefault(r.snapshot, []).append(r)
-    for k, renders in sorted(by_snap.items()):
+    arrays, params = empty_shard(cfg, spec)
+    for k, renders in renders_by_snapshot(spec):
         snap = snapshots[k]
         vp_e, rho_e = element_properties(snap.ids, snap.layer, layer_props, model, elem_seed)
         vp_g, rho_g = property_grids(snap.xy, snap.radius, vp_e, rho_e, snap.layer, grid, model)
         maps = dict(label_maps(snap, history[k], grid, cfg.labels, displacement=disp[k]))
-        facts = sample_facts(maps)
-        impedance = vp_g * rho_g
-        domain = "depth" if t_s is None else "time"
-        # one imaging call per (imaging, angle, aperture), all its frequencies at once
-        wanted: dict[tuple[str, float, float], set[float]] = {}
-        for r in renders:
-            wanted.setdefault(_imaging_key(r), set()).add(r.freq_hz)
-        images = {}
-        for key, fset in wanted.items():
-            freqs = sorted(fset)
-            secs = imaged_sections(key[0], vp_g, rho_g, grid.cell_m, freqs, domain, t_s=t_s,
-                                   max_angle_deg=key[1], aperture_m=key[2])
-            images.update({(key, f): sec for f, sec in zip(freqs, secs)})
-        if t_s is not None:
-            fills = {"fault": 0, "damage": 0, "strain": 0.0, "layer": -1, "fault_id": 0,
-                     "slip_m": 0.0, "dip_deg": 0.0, "sense": 0}
-            for name, fill in fills.items():
-                maps[name] = depth_to_time(maps[name], vp_g, grid.cell_m, t_s, method="nearest", fill=fill)
-            impedance = depth_to_time(impedance, vp_g, grid.cell_m, t_s, method="nearest", fill=0.0)
-        for r in renders:
-            clean = images[(_imaging_key(r), r.freq_hz)]
-            noisy = add_noise(clean, r.snr_db, r.noise_kind, np.random.default_rng(r.seed))
-            i = r.sample
-            arrays["seismic"][i] = noisy
-            for name in ("fault", "damage", "strain", "layer", "fault_id", "slip_m", "dip_deg",
-                         "sense"):
-                arrays[name][i] = maps[name]
-            if "impedance" in arrays:
-                arrays["impedance"][i] = impedance
-            row = {
-                "run_id": spec.run, "sample_in_run": i, "snapshot": k, "step": snap.step,
-                "throw_m": snap.throw_m, "n_elements": snap.n, "freq_hz": r.freq_hz,
-                "snr_db": r.snr_db, "noise_seed": r.seed, "noise_kind": r.noise_kind,
-                "imaging": r.imaging, "psf_max_angle_deg": r.psf_max_angle_deg,
-                "psf_aperture_m": r.psf_aperture_m,
-                **{k: v for k, v in info.items() if not k.startswith("_")},
-                **fault_throws_of(info, k, len(snapshots)),
-                **facts,
-            }
-            for key, value in {**p, **row}.items():
-                if key in PARAM_CODES:
-                    value = PARAM_CODES[key].index(value)
-                params[key][i] = value
+        row = {"snapshot": k, "step": snap.step, "throw_m": snap.throw_m, "n_elements": snap.n,
+               **fault_throws_of(info, k, len(snapshots))}
+        render_samples(cfg, spec, renders, vp_g, rho_g, maps, {**info, **row}, arrays, params)
     return ShardData(arrays=arrays, params=params, snapshots=snapshots)
+
+
+def empty_shard(cfg: Config, spec: RunSpec) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Zeroed (S, H, W) sample arrays and (S,) parameter arrays of run ``spec``."""
+    S = len(spec.renders)
+    arrays = {k: np.zeros((S, *sample_shape(cfg)), dtype=v) for k, v in array_dtypes(cfg).items()}
+    params = {k: np.zeros(S, dtype=v) for k, v in param_dtypes().items()}
+    return arrays, params
+
+
+def renders_by_snapshot(spec: RunSpec) -> list[tuple[int, list[Render]]]:
+    """The renders of ``spec`` grouped by snapshot, in snapshot order."""
+    by_snap: dict[int, list[Render]] = {}
+    for r in spec.renders:
+        by_snap.setdefault(r.snapshot, []).append(r)
+    return sorted(by_snap.items())
+
+
+def render_samples(cfg: Config, spec: RunSpec, renders: list[Render], vp_g: np.ndarray,
+                   rho_g: np.ndarray, maps: dict[str, np.ndarray], row: dict[str, Any],
+                   arrays: dict[str, np.ndarray], params: dict[str, np.ndarray]) -> None:
+    """Image, add noise and store the samples ``renders`` of one geological state.
+
+    Shared by the DEM and the kinematic engine: ``vp_g``, ``rho_g`` are the depth-domain
+    property grids, ``maps`` the label maps (``fault``, ``damage``, ``strain``, ``layer``,
+    ``fault_id``, ``slip_m``, ``dip_deg``, ``sense``), ``row`` the per-sample values of this
+    state (keys starting with ``_`` are ignored). Fills ``arrays[...][r.sample]`` and
+    ``params[...][r.sample]`` in place.
+    """
+    from demseis.labels.maps import sample_facts
+    from demseis.seismic import add_noise, depth_to_time, imaged_sections
+
+    grid = grid_of(cfg)
+    t_s = time_axis_of(cfg)
+    maps = dict(maps)
+    facts = sample_facts(maps)
+    impedance = vp_g * rho_g
+    domain = "depth" if t_s is None else "time"
+    # one imaging call per (imaging, angle, aperture), all its frequencies at once
+    wanted: dict[tuple[str, float, float], set[float]] = {}
+    for r in renders:
+        wanted.setdefault(_imaging_key(r), set()).add(r.freq_hz)
+    images = {}
+    for key, fset in wanted.items():
+        freqs = sorted(fset)
+        secs = imaged_sections(key[0], vp_g, rho_g, grid.cell_m, freqs, domain, t_s=t_s,
+                               max_angle_deg=key[1], aperture_m=key[2])
+        images.update({(key, f): sec for f, sec in zip(freqs, secs)})
+    if t_s is not None:
+        fills = {"fault": 0, "damage": 0, "strain": 0.0, "layer": -1, "fault_id": 0,
+                 "slip_m": 0.0, "dip_deg": 0.0, "sense": 0}
+        for name, fill in fills.items():
+            maps[name] = depth_to_time(maps[name], vp_g, grid.cell_m, t_s, method="nearest", fill=fill)
+        impedance = depth_to_time(impedance, vp_g, grid.cell_m, t_s, method="nearest", fill=0.0)
+    for r in renders:
+        clean = images[(_imaging_key(r), r.freq_hz)]
+        noisy = add_noise(clean, r.snr_db, r.noise_kind, np.random.default_rng(r.seed))
+        i = r.sample
+        arrays["seismic"][i] = noisy
+        for name in ("fault", "damage", "strain", "layer", "fault_id", "slip_m", "dip_deg",
+                     "sense"):
+            arrays[name][i] = maps[name]
+        if "impedance" in arrays:
+            arrays["impedance"][i] = impedance
+        values = {
+            "run_id": spec.run, "sample_in_run": i, "freq_hz": r.freq_hz,
+            "snr_db": r.snr_db, "noise_seed": r.seed, "noise_kind": r.noise_kind,
+            "imaging": r.imaging, "psf_max_angle_deg": r.psf_max_angle_deg,
+            "psf_aperture_m": r.psf_aperture_m,
+            **{k: v for k, v in row.items() if not k.startswith("_")},
+            **facts,
+        }
+        for key, value in {**spec.params, **values}.items():
+            if key in PARAM_CODES:
+                value = PARAM_CODES[key].index(value)
+            params[key][i] = value
 
 
 def _imaging_key(r: Render) -> tuple[str, float, float]:
@@ -356,13 +377,37 @@ def _imaging_key(r: Render) -> tuple[str, float, float]:
     return (r.imaging, r.psf_max_angle_deg, r.psf_aperture_m if r.psf_aperture_m > 0 else math.inf)
 
 
+def require_particles(cfg: Config, what: str) -> None:
+    """Refuse ``what`` (a command that needs DEM particles) for a kinematic-engine config.
+
+    Raises
+    ------
+    InputError
+        ``cfg.model.engine`` is ``"kinematic"``: such runs have no particles.
+    """
+    if cfg.model.engine == "kinematic":
+        from demseis.errors import InputError
+
+        raise InputError(f"{what} needs DEM particle snapshots, and this is a kinematic-engine "
+                         "config/store ([model] engine = \"kinematic\"), which has none: "
+                         "run `demseis generate` with the settings you want instead")
+
+
 def run_shard(cfg: Config, run: int, progress: Callable[[float], None] | None = None, *,
               timings: dict[str, float] | None = None) -> ShardData:
-    """DEM run ``run`` and all its renders; ``timings`` (if given) gets dem_s and render_s."""
+    """Run ``run`` and all its renders (the DEM, or the kinematic engine); ``timings`` (if given)
+    gets dem_s (the engine) and render_s."""
     import time
 
     t0 = time.perf_counter()
     spec = plan_run(cfg, run)
+    if cfg.model.engine == "kinematic":
+        from demseis.generator.kinematic import kinematic_run
+
+        data = kinematic_run(cfg, spec)
+        if timings is not None:
+            timings.update(dem_s=time.perf_counter() - t0, render_s=0.0)
+        return data
     snaps, info = simulate_run(cfg, spec, progress)
     t1 = time.perf_counter()
     data = render_run(cfg, spec, snaps, info)

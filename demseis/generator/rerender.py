@@ -10,7 +10,7 @@ import numpy as np
 
 from demseis.errors import StoreError
 from demseis.generator.config import Config, parse_config
-from demseis.generator.pipeline import render_run, run_info
+from demseis.generator.pipeline import render_run, require_particles, run_info
 from demseis.generator.sampling import plan_run
 from demseis.generator.sweep import SweepSummary, _progress_bar, prepare_store
 
@@ -113,6 +113,7 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
     t0 = time.perf_counter()
     if Path(out).resolve() == src.resolve():
         raise StoreError("--out must differ from the source store")
+    require_particles(cfg, "render/relabel")
     src_status = shard_status(src)
     status = prepare_store(cfg, out, overwrite=overwrite)
     pending = [int(i) for i in np.flatnonzero(status != 1)]

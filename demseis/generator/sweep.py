@@ -198,7 +198,7 @@ def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, An
         return {"shard": shard, "error": f"SimulationError: {exc}"}
     t2 = time.perf_counter()
     try:
-        write_shard(store, shard, data.arrays, data.params, data.snapshots)
+        write_shard(store, shard, data.arrays, data.params, data.snapshots or None)
     except OSError as exc:  # disk full, read-only, permissions: retrying cannot help
         return {"shard": shard, "os_error": describe_os_error(exc, store)}
     t3 = time.perf_counter()

@@ -44,10 +44,12 @@ def test_train_unet_example_runs_and_scores(tmp_path, capsys):
     spec.loader.exec_module(mod)
     out = tmp_path / "run"
     rc = mod.main([str(store), "--out-dir", str(out), "--minutes", "0.03", "--crop", "16",
-                   "--batch", "4", "--threads", "1", "--by", "freq_hz,snr_db"])
+                   "--batch", "4", "--threads", "1", "--by", "freq_hz,snr_db",
+                   "--val-every", "2"])
     assert rc == 0
     text = capsys.readouterr().out
     assert text.count("scores of") == 2 and "freq_hz" in text
+    assert "best val F1@2" in text and (out / "unet.pt").is_file()
     idx = np.load(out / "test_indices.npy")
     pred = np.load(out / "unet_test.npy")
     assert pred.shape == (idx.size, 32, 32) and 0 <= pred.min() and pred.max() <= 1

@@ -1,0 +1,204 @@
+"""The kinematic engine (``[model] engine = "kinematic"``): FaultSeg-style sections, no DEM.
+
+A run is a stack of random layers (thicknesses Gamma-distributed with ``layer_thickness_cv``,
+rock from the run's :class:`~demseis.seismic.PropertyModel`), optionally folded
+(``fold_amplitude_m``, ``fold_kind``), cut by the faults of the run's basement system (the same
+``structure``, ``n_faults``, ``fault_kind``, ``dip_deg``, ``throw_m``, ``dip_direction``,
+``listric_radius_m`` draws as the DEM engine's, :func:`demseis.generator.pipeline.run_info`).
+
+Faulting is geometry. Fault ``k`` meets the base of the model at ``x_m`` and rises towards the
+footwall: planar at ``dip_deg``, or listric (a circular arc of radius ``listric_radius_m``,
+``dip_deg`` at the top, flattening with depth: cos(dip(d)) = cos(dip_deg) + d / R). Its
+hanging wall is moved along the fault by the local throw, which dies out along the fault
+(``throw_taper``: throw(d) = throw (1 - taper ((d - c) / L)^2), clipped at 0, centre ``c``
+drawn in the middle of the section, half-length ``L = 0.6 height``). Faults are applied oldest
+first; a sample is computed backwards, youngest fault first, by mapping every present cell to
+where its rock came from, so older faults are offset by younger ones.
+
+Snapshot ``k`` of ``n_snapshots`` holds the fraction ``k / (n - 1)`` of every throw, so a run
+has the same samples as a DEM run. The properties and labels then go through the shared
+imaging, noise and storage of :func:`demseis.generator.pipeline.render_samples`:
+
+- ``fault`` cells lie within ``max(thickness_cells, 1) / 2`` cells (perpendicular) of a fault
+  where its throw is > 0; ``damage`` is 2 there and 1 within three times that distance;
+- ``fault_id`` is the fault's number (1..), ``slip_m`` its local dip-slip (throw / sin dip),
+  ``dip_deg`` its local dip, ``sense`` 1 (normal, listric) or 2 (reverse);
+- ``layer`` is the layer index the rock came from (0 = deepest of the stack, which extends
+  above and below the section so that every cell holds rock); ``strain`` is 0 (no strain field
+  without particles).
+
+There are no particles: the store's ``particles/`` group stays empty.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from demseis.generator.config import Config
+from demseis.generator.pipeline import (
+    ShardData,
+    empty_shard,
+    fault_throws_of,
+    grid_of,
+    property_model_of,
+    render_samples,
+    renders_by_snapshot,
+    run_info,
+)
+from demseis.generator.sampling import SEED_DEM, SEED_LAYERS, SEED_PROPERTIES, RunSpec, rng_at
+
+#: the layer stack covers depths [-ABOVE, 1 + BELOW] x height (uplift, subsidence and folds)
+ABOVE, BELOW = 1.0, 1.0
+#: half-length of a fault as a fraction of the model height (the throw taper's L)
+HALF_LENGTH_FRAC = 0.6
+
+
+def fault_geometry(depth_m: np.ndarray, x_base_m: float, dip_deg: float, height_m: float,
+                   direction: int, listric_radius_m: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """x of a fault (m) and its dip (deg) at each depth of the increasing axis ``depth_m``.
+
+    The fault meets depth ``height_m`` at ``x_base_m``; ``direction`` +1 dips right (the
+    trace moves to larger x with depth), -1 left. ``listric_radius_m`` None: planar.
+    """
+    d = np.asarray(depth_m, dtype=np.float64)
+    if listric_radius_m is None:
+        dip = np.full(d.shape, float(dip_deg))
+    else:
+        cos = np.cos(np.radians(dip_deg)) + np.clip(d, 0.0, None) / listric_radius_m
+        dip = np.degrees(np.arccos(np.clip(cos, 0.0, np.cos(np.radians(10.0)))))
+    cot = 1.0 / np.tan(np.radians(dip))
+    # x(d) = x_base - direction * integral_d^H cot(dip) (trapezoid on the axis, then to H)
+    cum = np.concatenate([[0.0], np.cumsum(0.5 * (cot[1:] + cot[:-1]) * np.diff(d))])
+    at_h = np.interp(height_m, d, cum)
+    return x_base_m - direction * (at_h - cum), dip
+
+
+def fold_field(x_m: np.ndarray, width_m: float, amplitude_m: float, kind: str,
+               rng: np.random.Generator) -> np.ndarray:
+    """Vertical displacement (m, down positive) of the layers at ``x_m`` by folding."""
+    x = np.asarray(x_m, dtype=np.float64)
+    n_bumps = int(rng.integers(1, 5))
+    centres = rng.uniform(0.0, width_m, n_bumps)
+    widths = rng.uniform(0.1, 0.3, n_bumps) * width_m
+    signs = rng.uniform(-1.0, 1.0, n_bumps)
+    wavelength = rng.uniform(0.5, 2.0) * width_m
+    phase = rng.uniform(0.0, 2 * np.pi)
+    if amplitude_m <= 0:
+        return np.zeros_like(x)
+    if kind == "sinusoidal":
+        return amplitude_m * np.sin(2 * np.pi * x / wavelength + phase)
+    return amplitude_m * sum(s * np.exp(-0.5 * ((x - c) / w) ** 2)
+                             for s, c, w in zip(signs, centres, widths))
+
+
+def layer_tops(n_layers: int, cv: float, height_m: float, rng: np.random.Generator) -> np.ndarray:
+    """Increasing depths (m) of the layer boundaries of a stack covering
+    ``[-ABOVE, 1 + BELOW] * height_m``, ``n_layers`` per model height on average, thicknesses
+    Gamma with coefficient of variation ``cv`` (equal for cv = 0)."""
+    n_total = int(np.ceil(n_layers * (1.0 + ABOVE + BELOW)))
+    w = rng.gamma(1.0 / cv**2, 1.0, size=n_total) if cv > 0 else np.ones(n_total)
+    h = (1.0 + ABOVE + BELOW) * height_m * w / w.sum()
+    return -ABOVE * height_m + np.concatenate([[0.0], np.cumsum(h)])
+
+
+def kinematic_state(cfg: Config, params: dict[str, Any], run: int, info: dict[str, Any],
+                    fraction: float) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Layer index and label maps of run ``run`` with ``fraction`` of every throw.
+
+    Returns
+    -------
+    layer : (nz, nx) int64 index into the run's layer stack (0 = deepest).
+    maps : the label maps of :mod:`demseis.labels` (``layer`` included).
+    """
+    grid = grid_of(cfg)
+    H, W = cfg.model.height_m, cfg.model.width_m
+    cell = grid.cell_m
+    half_m = 0.5 * max(float(cfg.labels.thickness_cells), 1.0) * cell
+    zc = (np.arange(grid.nz) + 0.5) * cell  # depth of the cell centres (row 0 at the top)
+    xc = (np.arange(grid.nx) + 0.5) * cell
+    X, D = np.meshgrid(xc, zc)
+    shape = X.shape
+    fault = np.zeros(shape, np.uint8)
+    damage = np.zeros(shape, np.uint8)
+    fid = np.zeros(shape, np.int16)
+    slip = np.zeros(shape, np.float32)
+    dip_map = np.zeros(shape, np.float32)
+    sense = np.zeros(shape, np.uint8)
+    rng = rng_at(cfg, run, SEED_DEM)
+    faults = info["_system"].faults
+    centres = rng.uniform(0.35, 0.65, len(faults)) * H  # drawn whatever the fraction
+    fold = fold_field(np.linspace(-W, 2 * W, 3 * grid.nx + 1), W,
+                      float(params["fold_amplitude_m"]), str(params["fold_kind"]), rng)
+    axis = np.linspace(-(ABOVE + 1.0) * H, (2.0 + BELOW) * H, 8 * grid.nz + 1)
+    taper = float(params["throw_taper"])
+    # youngest fault first: map present cells back to where their rock was before it slipped
+    for k in range(len(faults) - 1, -1, -1):
+        f = faults[k]
+        s = 1 if f.dip_direction == "right" else -1
+        radius = f.radius_m if f.kind == "listric" else None
+        xf, dipf = fault_geometry(axis, f.x_m, f.dip_deg, H, s, radius)
+        x_here = np.interp(D, axis, xf)
+        dip_here = np.interp(D, axis, dipf)
+        u = (D - centres[k]) / (HALF_LENGTH_FRAC * H)
+        throw = fraction * f.throw_m * np.clip(1.0 - taper * u**2, 0.0, None)
+        hanging = (X - x_here) * s > 0
+        perp = np.abs(X - x_here) * np.sin(np.radians(dip_here))
+        active = throw > 0
+        # labels of this fault, in present coordinates (cells not yet claimed by a younger one)
+        free = fid == 0
+        on = active & (perp <= half_m) & free
+        fault[on] = 1
+        damage[active & (perp <= 3 * half_m) & (damage == 0)] = 1
+        damage[on] = 2
+        fid[on] = k + 1
+        slip[on] = (throw / np.sin(np.radians(dip_here)))[on]
+        dip_map[on] = dip_here[on]
+        sense[on] = 2 if f.kind == "reverse" else 1
+        # hanging wall: normal/listric moved down-dip, reverse up-dip; undo it
+        sign = -1.0 if f.kind == "reverse" else 1.0
+        heave = throw / np.tan(np.radians(dip_here))
+        D = np.where(hanging, D - sign * throw, D)
+        X = np.where(hanging, X - sign * s * heave, X)
+    depth0 = D - np.interp(X, np.linspace(-W, 2 * W, 3 * grid.nx + 1), fold)
+    tops = layer_tops(int(params["n_layers"]), float(params["layer_thickness_cv"]), H,
+                      rng_at(cfg, run, SEED_LAYERS))
+    n_total = tops.size - 1
+    # layer 0 is the deepest: count from the bottom of the stack
+    from_top = np.clip(np.searchsorted(tops, depth0, side="right") - 1, 0, n_total - 1)
+    layer = (n_total - 1 - from_top).astype(np.int64)
+    maps = {"fault": fault, "damage": damage, "strain": np.zeros(shape, np.float32),
+            "layer": layer.astype(np.int16), "fault_id": fid, "slip_m": slip,
+            "dip_deg": dip_map, "sense": sense}
+    return layer, maps
+
+
+def kinematic_run(cfg: Config, spec: RunSpec) -> ShardData:
+    """All samples of run ``spec.run`` from the kinematic engine (no particles)."""
+    from scipy.ndimage import gaussian_filter
+
+    from demseis.seismic import draw_layer_properties
+
+    p = spec.params
+    info = run_info(cfg, p, spec.run)
+    model = property_model_of(cfg, p)
+    n_snap = cfg.model.n_snapshots
+    arrays, params = empty_shard(cfg, spec)
+    props = None
+    for k, renders in renders_by_snapshot(spec):
+        fraction = k / (n_snap - 1)
+        layer, maps = kinematic_state(cfg, p, spec.run, info, fraction)
+        if props is None:
+            n_total = int(np.ceil(int(p["n_layers"]) * (1.0 + ABOVE + BELOW)))
+            props = draw_layer_properties(n_total, model, rng_at(cfg, spec.run, SEED_PROPERTIES))
+        vp_g, rho_g = props.vp[layer], props.rho[layer]
+        sigma = float(p["gaussian_sigma_cells"])
+        if sigma > 0:
+            vp_g, rho_g = gaussian_filter(vp_g, sigma), gaussian_filter(rho_g, sigma)
+        throws = fault_throws_of(info, k, n_snap)
+        master = info["_system"].faults[info["_system"].master]
+        row = {"snapshot": k, "step": k, "throw_m": fraction * master.throw_m, "n_elements": 0,
+               **throws}
+        render_samples(cfg, spec, renders, vp_g, rho_g, maps, {**info, **row}, arrays, params)
+    return ShardData(arrays=arrays, params=params, snapshots=[])
