@@ -27,8 +27,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from demseis.dem import Material, NormalFault, build_assembly, settle_pack, simulate  # noqa
-from demseis.dem.fault import save_snapshots  # noqa
 from demseis.dem.measure import horizon_step  # noqa
+from _dem_common import finish  # noqa: E402  (benchmarks/ is on sys.path)
 
 SCALES = {"seed": (5000.0, 2770.0, 48, 450.0), "quick": (2500.0, 1385.0, 24, 225.0)}
 
@@ -85,14 +85,8 @@ def main(argv=None) -> int:
                step_100m_over_throw=round(s100 / throw, 3),
                steps=last.step, wall_s=round(time.perf_counter() - t0, 1),
                cpu_s=round(time.process_time() - c0, 1))
-    if args.save:
-        save_snapshots(args.save, snaps)
-    if args.figure:
-        from demseis.plotting import plot_snapshots
-        plot_snapshots(snaps, args.figure, title=f"C0={mat.cohesion_n:.2g} N, mu={mat.friction}, "
-                       f"{mat.model}: 100 m step {s100:.0f} m of {throw:.0f} m")
-    print(json.dumps(res))
-    return 0
+    return finish(res, snaps, args, f"C0={mat.cohesion_n:.2g} N, mu={mat.friction}, "
+                  f"{mat.model}: 100 m step {s100:.0f} m of {throw:.0f} m")
 
 
 if __name__ == "__main__":

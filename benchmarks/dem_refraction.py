@@ -18,7 +18,6 @@ Prints ONE JSON line: mean dip in strong and weak units and their difference.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 import time
@@ -29,9 +28,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from demseis.dem import BRITTLE, NormalFault, build_assembly, settle_pack, simulate  # noqa
-from demseis.dem.fault import save_snapshots  # noqa
 from demseis.dem.measure import fault_crossings  # noqa
 from demseis.dem.strata import is_strong, layer_materials  # noqa
+from _dem_common import finish  # noqa: E402  (benchmarks/ is on sys.path)
 
 W, H, N_LAYERS, THROW = 5000.0, 2770.0, 24, 450.0
 
@@ -76,14 +75,8 @@ def main(argv=None) -> int:
            "dips_weak": [round(d, 1) for d in dips["weak"]],
            "cpu_s": round(time.process_time() - t0, 1)}
     res["difference_deg"] = round(res["mean_dip_strong_deg"] - res["mean_dip_weak_deg"], 1)
-    if args.save:
-        save_snapshots(args.save, snaps)
-    if args.figure:
-        from demseis.plotting import plot_snapshots
-        plot_snapshots(snaps, args.figure, title=f"strong/weak units of {u} layers, contrast "
-                       f"{args.contrast:g}")
-    print(json.dumps(res))
-    return 0
+    return finish(res, snaps, args, f"strong/weak units of {u} layers, contrast "
+                  f"{args.contrast:g}")
 
 
 if __name__ == "__main__":

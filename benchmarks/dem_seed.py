@@ -12,7 +12,6 @@ layering and faulting, and the peak resident memory of the process.
 from __future__ import annotations
 
 import argparse
-import json
 import resource
 import sys
 import time
@@ -23,7 +22,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from demseis.dem import Material, NormalFault, build_assembly, settle_pack, simulate  # noqa
-from demseis.dem.fault import save_snapshots  # noqa
+from _dem_common import finish  # noqa: E402  (benchmarks/ is on sys.path)
 
 
 def main(argv=None) -> int:
@@ -53,14 +52,8 @@ def main(argv=None) -> int:
            "fault_wall_s": round(t2 - t1, 2), "fault_cpu_s": round(c2 - c1, 2),
            "total_wall_s": round(t2 - t0, 2), "total_cpu_s": round(c2 - c0, 2),
            "peak_rss_mib": round(peak_mib, 1), "cached_pack": args.cache_dir is not None}
-    if args.save:
-        save_snapshots(args.save, snaps)
-    if args.figure:
-        from demseis.plotting import plot_snapshots
-        plot_snapshots(snaps, args.figure, title=f"demseis DEM: {args.dip:.0f} deg normal fault, "
-                       f"{asm.n} elements, 48 layers")
-    print(json.dumps(res))
-    return 0
+    return finish(res, snaps, args, f"demseis DEM: {args.dip:.0f} deg normal fault, "
+                  f"{asm.n} elements, 48 layers")
 
 
 if __name__ == "__main__":

@@ -8,21 +8,17 @@ runs both baselines on 8 sections, each repeated; medians of the repeats, after 
 from __future__ import annotations
 
 import json
-import time
 
 import numpy as np
 
 from demseis.evaluation.baseline import dip_fault_probability, semblance_fault_probability
 from demseis.evaluation.scoring import score
+from demseis.bench import median_ms
 
 
-def _median_time(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
+def _seconds(fn, repeats: int) -> float:
+    """Median wall-clock seconds of ``fn()`` over ``repeats`` calls."""
+    return median_ms(fn, repeats)[0] / 1e3
 
 
 def main() -> None:
@@ -32,10 +28,10 @@ def main() -> None:
     pred = np.clip(rng.random((n, h, w)) * 0.6 + 0.4 * truth, 0, 1).astype(np.float32)
     sections = rng.normal(size=(8, h, w)).astype(np.float32)
     semblance_fault_probability(sections[:1, :16, :16])  # compile
-    t0 = _median_time(lambda: score(pred, truth), 3)
-    t2 = _median_time(lambda: score(pred, truth, tolerance_px=2), 3)
-    tb = _median_time(lambda: semblance_fault_probability(sections), 3)
-    td = _median_time(lambda: dip_fault_probability(sections), 3)
+    t0 = _seconds(lambda: score(pred, truth), 3)
+    t2 = _seconds(lambda: score(pred, truth, tolerance_px=2), 3)
+    tb = _seconds(lambda: semblance_fault_probability(sections), 3)
+    td = _seconds(lambda: dip_fault_probability(sections), 3)
     print(json.dumps({
         "benchmark": "score_speed", "section_shape": [h, w],
         "score_tol0_ms_per_section": round(1e3 * t0 / n, 3),

@@ -19,24 +19,18 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
-import statistics
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
 from demseis.datasets import create_store, shard_status, validate_store, write_shard
-from demseis.bench import synthetic_shard
+from demseis.bench import median_ms, synthetic_shard
 
 
-def _median_s(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+def _seconds(fn, repeats: int) -> float:
+    """Median wall-clock seconds of ``fn()`` over ``repeats`` calls."""
+    return median_ms(fn, repeats)[0] / 1e3
 
 
 def main() -> None:
@@ -60,9 +54,9 @@ def main() -> None:
             write_shard(store, k, synthetic_shard(rng, s, h, w), {"run_id": np.full(s, k)})
         nbytes = sum(f.stat().st_size for f in store.rglob("*") if f.is_file())
         shard_status(store, verify=True)  # warm the page cache
-        flags = _median_s(lambda: shard_status(store), args.repeats)
-        verify = _median_s(lambda: shard_status(store, verify=True), args.repeats)
-        validate = _median_s(lambda: validate_store(store), max(1, args.repeats // 2))
+        flags = _seconds(lambda: shard_status(store), args.repeats)
+        verify = _seconds(lambda: shard_status(store, verify=True), args.repeats)
+        validate = _seconds(lambda: validate_store(store), max(1, args.repeats // 2))
         print(json.dumps({
             "benchmark": "store_verify",
             "n_shards": args.shards,

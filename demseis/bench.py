@@ -143,7 +143,7 @@ def dem_benchmark(xy: np.ndarray, radius: np.ndarray, n_steps: int = 2000,
 # seismic
 
 
-def _median_ms(fn, repeats: int) -> tuple[float, float]:
+def median_ms(fn, repeats: int) -> tuple[float, float]:
     """Median wall-clock and process-CPU milliseconds of ``fn()`` over ``repeats`` calls."""
     wall, cpu = [], []
     for _ in range(repeats):
@@ -210,17 +210,17 @@ def seismic_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeat
     render(freqs_hz)  # warm-up: Numba compilation / cache load
     nf = len(freqs_hz)
     comp = {
-        "element_properties": _median_ms(props, repeats),
-        "rasterise": _median_ms(rast, repeats),
-        "background": _median_ms(background, repeats),
-        "smooth_vp_rho": _median_ms(smoothing, repeats),
-        "convolution_1f": _median_ms(lambda: synthetic_sections(vp_g, rho_g, cell_m, f1),
+        "element_properties": median_ms(props, repeats),
+        "rasterise": median_ms(rast, repeats),
+        "background": median_ms(background, repeats),
+        "smooth_vp_rho": median_ms(smoothing, repeats),
+        "convolution_1f": median_ms(lambda: synthetic_sections(vp_g, rho_g, cell_m, f1),
                                      repeats),
-        f"convolution_{nf}f": _median_ms(
+        f"convolution_{nf}f": median_ms(
             lambda: synthetic_sections(vp_g, rho_g, cell_m, freqs_hz), repeats),
     }
-    full1 = _median_ms(lambda: render(f1), repeats)
-    fulln = _median_ms(lambda: render(freqs_hz), repeats)
+    full1 = median_ms(lambda: render(f1), repeats)
+    fulln = median_ms(lambda: render(freqs_hz), repeats)
     return {
         "benchmark": "seismic_render",
         "nz": grid.nz,

@@ -47,14 +47,6 @@ def validate_fault(fault: NormalFault, width_m: float) -> None:
     PARAMS["wall_speed_m_s"].check_value(fault.speed_m_s, "NormalFault.speed_m_s", InputError)
 
 
-def save_snapshots(path: str, snaps: list[Snapshot]) -> None:
-    """Write snapshots to a compressed ``.npz``: ``<field>_<k>`` for ids, xy, radius, layer,
-    deposited of snapshot k, and ``throw_m`` (one per snapshot)."""
-    np.savez_compressed(path, **{f"{k}_{i}": getattr(s, k) for i, s in enumerate(snaps)
-                                 for k in ("ids", "xy", "radius", "layer", "deposited")},
-                        throw_m=np.array([s.throw_m for s in snaps]))
-
-
 def surface_profile(xy: np.ndarray, radius: np.ndarray, x_edges: np.ndarray) -> np.ndarray:
     """Top surface elevation per column: max of (y + r) over elements centred in the column.
 

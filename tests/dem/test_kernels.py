@@ -141,13 +141,17 @@ def test_pair_forces_match_reference(c0, flag, heal, layered):
     assert sum(bond0.values()) > sum(bo_ref.values()) > 0
 
 
-def test_wall_forces_match_reference():
+def _walls_case():
+    """A random assembly with three walls (vertical, sloping, short) and random wall velocities."""
     pos, vel, r, rng = _random_assembly()
-    n = len(r)
     walls = np.array([[pos[:, 0].min() + 5, -100.0, pos[:, 0].min() + 5, 1000.0],
                       [-100.0, pos[:, 1].min() + 3, 1000.0, pos[:, 1].min() + 10],
                       [100.0, 100.0, 160.0, 150.0]])
-    wv = rng.normal(0, 1, (3, 2))
+    return pos, vel, r, rng, len(r), walls, rng.normal(0, 1, (3, 2))
+
+
+def test_wall_forces_match_reference():
+    pos, vel, r, rng, n, walls, wv = _walls_case()
     wsh = rng.normal(0, 0.05, (n, 3))
     wsh0 = wsh.copy()
     kn, ks, mu, dt = 1e10, 5e9, 0.5, 0.003
@@ -179,12 +183,7 @@ def test_wall_forces_match_reference():
 
 
 def test_listed_wall_forces_equal_full_scan():
-    pos, vel, r, rng = _random_assembly()
-    n = len(r)
-    walls = np.array([[pos[:, 0].min() + 5, -100.0, pos[:, 0].min() + 5, 1000.0],
-                      [-100.0, pos[:, 1].min() + 3, 1000.0, pos[:, 1].min() + 10],
-                      [100.0, 100.0, 160.0, 150.0]])
-    wv = rng.normal(0, 1, (3, 2))
+    pos, vel, r, rng, n, walls, wv = _walls_case()
     sh0 = rng.normal(0, 0.05, (n, 3))
     skin = 4.0
     cand = np.zeros((3, n), np.int32)

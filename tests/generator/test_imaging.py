@@ -9,18 +9,15 @@ import pytest
 import zarr
 
 from demseis.cli import main
+from tests.generator._helpers import generate_tiny
 
 
 @pytest.fixture(scope="module")
 def both_store(tmp_path_factory) -> Path:
     """The tiny preset, no noise, every snapshot imaged in 1-D and with the PSF at 25 deg."""
-    d = tmp_path_factory.mktemp("img")
-    cfg = d / "both.toml"
-    cfg.write_text('[sweep]\nsnr_db = inf\nimaging = ["1d", "psf"]\npsf_max_angle_deg = 25\n')
-    out = d / "both.zarr"
-    assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(out), "--workers", "0",
-                 "--quiet"]) == 0
-    return out
+    return generate_tiny(tmp_path_factory.mktemp("img"),
+                         '[sweep]\nsnr_db = inf\nimaging = ["1d", "psf"]\npsf_max_angle_deg = 25\n',
+                         "both")
 
 
 def _pairs(root):
@@ -55,11 +52,7 @@ def test_imaging_is_drawn_and_recorded_per_sample(both_store):
 
 def test_the_1d_samples_are_the_default_render(both_store, tmp_path):
     """Adding imaging = psf leaves the 1-D samples byte-identical to a 1-D-only sweep."""
-    cfg = tmp_path / "one.toml"
-    cfg.write_text("[sweep]\nsnr_db = inf\n")
-    out = tmp_path / "one.zarr"
-    assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(out), "--workers", "0",
-                 "--quiet"]) == 0
+    out = generate_tiny(tmp_path, "[sweep]\nsnr_db = inf\n", "one")
     one = zarr.open_group(str(out), mode="r")
     both = zarr.open_group(str(both_store), mode="r")
     np.testing.assert_array_equal(one["params/imaging"][:], 0)

@@ -10,6 +10,7 @@ import pytest
 from demseis.errors import ConfigError
 from demseis.generator.config import load_config, parse_config
 from demseis.generator.physics import MAX_WALL_MACH, p_wave_speed_m_s
+from tests.generator._helpers import generate_tiny
 
 
 @pytest.mark.parametrize("preset", ["tiny", "quick", "seed"])
@@ -63,14 +64,9 @@ def test_wall_speed_bound_is_the_p_wave_fraction():
 
 def test_run_without_fault_is_recorded(tmp_path, capsys):
     """A run whose last snapshot has no fault pixel is named in the sweep summary."""
-    from demseis.cli import main
-
-    cfg = tmp_path / "c.toml"
     # 4 m of throw (slowly, to stay quasi-static) is below the labels' minimum slip: no fault
-    cfg.write_text("[sweep]\nn_runs = 1\nthrow_m = 4.0\ndip_deg = 60\n[model]\nwall_speed_m_s = 0.4\n")
-    out = tmp_path / "nf.zarr"
-    assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(out), "--workers", "0",
-                 "--quiet"]) == 0
+    out = generate_tiny(tmp_path, "[sweep]\nn_runs = 1\nthrow_m = 4.0\ndip_deg = 60\n"
+                        "[model]\nwall_speed_m_s = 0.4\n", "nf")
     text = capsys.readouterr().out
     assert "1 run(s) ended with no fault" in text and ": 0" in text
     import zarr
