@@ -56,11 +56,13 @@ def quick_run():
 
 @pytest.mark.slow
 def test_quick_dem_run_labels(quick_run):
-    """Measured at the time of writing (quick run 0, snapshots 1-3): rungs 0.000-0.004,
-    1 loop (6 after the cross-machine fix redrew the pack: the count is reported, not bounded;
-    what is asserted is that every loop is a lens whose cells all slip); of the cells whose jump is >= 2 x min_slip_m, 0.57 lie within 2 cells of a
-    1-cell label (0.48 on the redrawn pack; this test guards against falling further) (0.75 with thickness 3, 0.83 with 5): the DEM's shear zones are 10+ cells
-    wide and a trace marks their slip surface, not their width (issue 13 asked for 0.9)."""
+    """Measured at the time of writing (quick run 0, snapshots 1-3): rungs 0.000-0.004, 1 loop
+    (6 after the cross-machine fix redrew the pack: the count is reported, not bounded; what is
+    asserted is that every loop is a lens whose cells all slip). Of the cells whose jump is
+    >= 2 x min_slip_m, 0.57 lay within 2 cells of a 1-cell label (0.48 on the redrawn pack; 0.75
+    with thickness 3, 0.83 with 5): the DEM's shear zones are 10+ cells wide and a trace marks
+    their slip surface, not their width (issue 13 asks for 0.9; this guards against falling
+    further)."""
     cfg, grid, snaps = quick_run
     lc = cfg.labels
     min_slip = lc.min_slip_for(grid.cell_m)
