@@ -37,7 +37,8 @@ def to_xarray(path: str | Path) -> Any:
     Returns
     -------
     xarray.Dataset
-        Data variables: every sample array, dims ``(sample, depth, x)`` (or ``(sample, twt,
+        Data variables: every sample array (``fault_dip_deg`` for the per-pixel ``dip_deg``,
+        whose name the per-sample parameter holds), dims ``(sample, depth, x)`` (or ``(sample, twt,
         x)`` for time-domain stores), read lazily with dask, with ``units`` and ``long_name``.
         Coordinates: ``depth`` (m) or ``twt`` (s), ``x`` (m); every parameter along ``sample``
         (categorical ones as strings, e.g. ``noise_kind`` = ``"white"``/``"band"``), and
@@ -62,6 +63,10 @@ def to_xarray(path: str | Path) -> Any:
         raise StoreError(f"xarray cannot open store {str(path)!r}: {exc}") from exc
     keep = [n for n in layout.arrays]
     ds = ds[keep]
+    # a per-pixel array named like a per-sample parameter (dip_deg: the traces' dip against the
+    # basement fault's dip) would be replaced by the parameter's coordinate: prefix it
+    clash = {n: f"fault_{n}" for n in keep if n in layout.params}
+    ds = ds.rename(clash)
     coords: dict[str, Any] = {}
     if pds is not None:
         for name in layout.params:

@@ -55,6 +55,13 @@ def test_to_xarray_coordinates_units_and_categories(generated):
     grid = grid_of(cfg)
     row = "twt" if cfg.output.domain == "time" else "depth"
     assert ds["seismic"].dims == ("sample", row, "x")
+    # every stored sample array is a data variable (per-pixel dip_deg as fault_dip_deg, since the
+    # per-sample parameter dip_deg is a coordinate)
+    import zarr
+
+    stored = {k for k, a in zarr.open_group(str(out), mode="r").arrays() if a.ndim == 3}
+    assert {("fault_" + k if k == "dip_deg" else k) for k in stored} <= set(ds.data_vars)
+    assert ds["dip_deg"].dims == ("sample",)
     np.testing.assert_allclose(ds["x"].values, grid.x_centres())
     assert ds["x"].attrs["units"] == "m"
     if row == "twt":
