@@ -23,10 +23,10 @@ import numpy as np
 from demseis.errors import InputError, StoreError
 
 
-def _decode(name: str, values: np.ndarray, codes: dict[str, Any], attrs: dict[str, Any]
-            ) -> np.ndarray:
-    """A categorical parameter as strings (integer codes decoded with the store's names)."""
-    names = attrs.get("categories") or codes.get(name)
+def _decode(values: np.ndarray, attrs: dict[str, Any]) -> np.ndarray:
+    """A categorical parameter as strings (integer codes decoded with the names in its array's
+    ``categories`` attribute, which every categorical parameter of a schema-2 store has)."""
+    names = attrs.get("categories")
     if names is None or values.dtype.kind not in "iu":
         return values
     table = np.asarray(list(names) + ["?"], dtype=str)
@@ -96,10 +96,9 @@ class Store:
         if self._params is None:
             from demseis.datasets.read import read_params
 
-            codes = self.attrs.get("param_codes", {}) or {}
             raw = read_params(self._root, len(self))
             self._params = {
-                k: _decode(k, v, codes, dict(self._root["params"][k].attrs))
+                k: _decode(v, dict(self._root["params"][k].attrs))
                 for k, v in raw.items()
             }
         return self._params

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from demseis.datasets.store import open_store, shard_status
+from demseis.datasets.store import SAMPLE_ARRAYS, open_store, shard_status
 from demseis.errors import InputError, StoreError
 
 
@@ -181,7 +181,6 @@ def store_summary(path: str | Path) -> list[str]:
     root = open_store(path)
     attrs = dict(root.attrs)
     cfg = attrs.get("config", {})
-    codes = attrs.get("param_codes", {})
     lines = [f"store: {path}", f"demseis schema: {attrs.get('demseis', {})}"]
     n, h, w = root["seismic"].shape
     n_shards = int(root["shard_done"].shape[0]) if "shard_done" in root else 1
@@ -191,8 +190,7 @@ def store_summary(path: str | Path) -> list[str]:
                  f"done shards: {int(done.sum()) // max(per_shard, 1)}")
     grid = attrs.get("grid", {})
     lines.append(f"grid: {h} x {w} cells of {grid.get('cell_m')} m")
-    for name in ("seismic", "fault", "damage", "strain", "layer", "impedance", "fault_id",
-                 "slip_m", "dip_deg", "sense"):
+    for name in SAMPLE_ARRAYS:
         if name in root:
             a = root[name]
             lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks {tuple(a.chunks)}")
@@ -201,9 +199,10 @@ def store_summary(path: str | Path) -> list[str]:
         vals = vals[done]
         if vals.size == 0:
             continue
-        if name in codes:                # names with their sample counts, e.g. imaging 1d (6), psf (6)
+        names = root["params"][name].attrs.get("categories")
+        if names:                        # names with their sample counts, e.g. imaging 1d (6), psf (6)
             codes_used, counts = np.unique(vals.astype(np.int64), return_counts=True)
-            shown = ", ".join(f"{codes[name][int(c)]} ({int(k)})" for c, k in zip(codes_used, counts))
+            shown = ", ".join(f"{names[int(c)]} ({int(k)})" for c, k in zip(codes_used, counts))
             lines.append(f"  {name:22s} {shown}")
             continue
         uniq = np.unique(vals)
