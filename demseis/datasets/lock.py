@@ -62,7 +62,8 @@ def _process_start(pid: int) -> str | None:
     return fields[19] if len(fields) > 19 else None
 
 
-def _pid_alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
+    """True when a process with this pid exists on this host."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -84,7 +85,7 @@ def is_stale(holder: dict[str, Any]) -> bool:
         pid = int(holder["pid"])
     except (KeyError, TypeError, ValueError):
         return False
-    if not _pid_alive(pid):
+    if not pid_alive(pid):
         return True
     recorded, now = holder.get("proc_start"), _process_start(pid)
     return recorded is not None and now is not None and recorded != now

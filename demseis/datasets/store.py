@@ -30,6 +30,7 @@ chunk that was never written reads as an invalid value and :func:`validate_store
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
@@ -954,8 +955,32 @@ def record_failures(path: str | Path, failures: Mapping[int, str]) -> dict[str, 
     return out
 
 
+# zarr's LocalStore writes each file as ``<name>.<uuid4 hex>.partial`` and renames it into place;
+# a writer killed between the two leaves the temporary file behind
+_PARTIAL_WRITE = re.compile(r"\.[0-9a-f]{32}\.partial$")
+
+
+def remove_partial_writes(path: str | Path) -> list[Path]:
+    """Delete the temporary files of writers that were killed mid-write. Driver only.
+
+    Only call this while holding the store's writer lock with no shard task running (before a
+    sweep starts, or after every task has finished): then any such file belongs to a process
+    that is gone. The files are harmless to readers (no key names them) but they make two
+    stores of the same config differ and they leak disk.
+
+    Returns the files removed.
+    """
+    removed = []
+    for f in Path(path).rglob("*.partial"):
+        if f.is_file() and _PARTIAL_WRITE.search(f.name):
+            f.unlink(missing_ok=True)
+            removed.append(f)
+    return removed
+
+
 def finalize_store(path: str | Path) -> None:
-    """Write consolidated metadata (once, at the end of a sweep). Driver only.
+    """Remove killed writers' temporary files and write consolidated metadata (once, at the end
+    of a sweep, when no shard task runs any more). Driver only.
 
     Any later metadata write (resume, :func:`record_failures`) drops the consolidated copy;
     calling this again restores it.
@@ -963,6 +988,7 @@ def finalize_store(path: str | Path) -> None:
     import zarr
 
     open_store(path, "r+")
+    remove_partial_writes(path)  # e.g. of a dask worker killed while it wrote its shard
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
         zarr.consolidate_metadata(str(Path(path)))

@@ -121,7 +121,7 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
 
     Returns the per-shard status (1 = done).
     """
-    from demseis.datasets import create_store, read_store_attrs, shard_status
+    from demseis.datasets import create_store, read_store_attrs, remove_partial_writes, shard_status
 
     out = Path(out)
     attrs = store_attrs(cfg)
@@ -135,16 +135,16 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
                 f"store {str(out)!r} was written with a different config (first difference: "
                 f"{diff}); use --overwrite to replace it, or choose another --out"
             )
+        # a driver killed mid-write (kill -9) leaves zarr's temporary files; we hold the lock
+        # and no task runs yet, so every one of them is stale
+        remove_partial_writes(out)
         return shard_status(out, verify=True)  # a damaged done shard is redone
     # A new store is built beside ``out`` and renamed into place, so a kill -9 while its
     # arrays are being created leaves no half-made store at ``out`` (found by the kill test).
     target = out
     if not out.exists():
+        _remove_orphan_creations(out)
         out = out.with_name(f".{out.name}.creating-{os.getpid()}")
-        if out.exists():
-            import shutil
-
-            shutil.rmtree(out)
     try:
         create_store(
             out,
@@ -165,6 +165,20 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
     if out != target:
         os.rename(out, target)
     return shard_status(target)
+
+
+def _remove_orphan_creations(out: Path) -> None:
+    """Delete the half-made stores ``.<name>.creating-<pid>`` beside ``out`` whose creating
+    process is gone (a driver killed while it created the arrays). The caller holds the lock
+    of ``out``, so no live driver is creating it; our own pid's leftover goes too."""
+    import shutil
+
+    from demseis.datasets.lock import pid_alive
+
+    for d in out.parent.glob(f".{out.name}.creating-*"):
+        pid = d.name.rsplit("-", 1)[-1]
+        if d.is_dir() and pid.isdigit() and (int(pid) == os.getpid() or not pid_alive(int(pid))):
+            shutil.rmtree(d, ignore_errors=True)
 
 
 def store_param_specs() -> dict[str, Any]:

@@ -63,6 +63,45 @@ def test_rerun_on_complete_store_is_a_no_op(tiny_store, capsys):
     assert _tree_bytes(tiny_store) == before
 
 
+def test_resume_removes_killed_writers_temporary_files(tiny_store, tmp_path):
+    # zarr writes <file>.<uuid hex>.partial then renames it; kill -9 in between leaves it (the
+    # kill test found one in a resumed store), and a half-made store beside it of a dead driver
+    import shutil
+
+    out = tmp_path / "copy.zarr"
+    shutil.copytree(tiny_store, out)
+    stale = [out / "params" / "dip_deg" / "c" / f"0.{'ab' * 16}.partial",
+             out / "seismic" / "c" / "1" / "0" / f"0.{'0f' * 16}.partial"]
+    for f in stale:
+        f.write_bytes(b"half a chunk")
+    keep = out / "seismic" / "c" / "notes.partial"  # not zarr's pattern: not ours to delete
+    keep.write_text("x")
+    orphan = tmp_path / ".other.zarr.creating-999999999"  # no such pid
+    orphan.mkdir()
+    assert main(["generate", "--preset", "tiny", "--out", str(out), "--workers", "0", "--quiet"]) == 0
+    assert not any(f.exists() for f in stale)
+    keep.unlink()
+    assert_same_bytes(tiny_store, out)
+    assert orphan.exists()  # another store's name: left alone
+    assert main(["generate", "--preset", "tiny", "--out", str(tmp_path / "other.zarr"),
+                 "--workers", "0", "--quiet"]) == 0
+    assert not orphan.exists()
+
+
+def test_finalize_removes_temporary_files_of_a_killed_worker(tiny_store, tmp_path):
+    import shutil
+
+    from demseis.datasets import finalize_store
+
+    out = tmp_path / "copy.zarr"
+    shutil.copytree(tiny_store, out)
+    stale = out / "fault" / "c" / "0" / "0" / f"0.{'12' * 16}.partial"
+    stale.write_bytes(b"x")
+    finalize_store(out)
+    assert not stale.exists()
+    assert_same_bytes(tiny_store, out)
+
+
 def test_different_config_refused_without_overwrite(tiny_store, tmp_path, capsys):
     cfg = tmp_path / "c.toml"
     cfg.write_text("[sweep]\nseed = 99\n")
