@@ -606,10 +606,10 @@ def create_store(
                            fill_value=float("nan"), compressors=_small_compressors(),
                            dimension_names=(name,),
                            attributes={"units": units, "long_name": long_name})[...] = values
+    specs: dict[str, dict[str, Any]] = {}  # array path -> create_array keywords
     for name, dtype in array_dtypes.items():
         spec = SAMPLE_ARRAY_SPECS[name]
-        group.create_array(
-            name,
+        specs[name] = dict(
             shape=(n, h, w),
             dtype=dtype,
             chunks=(1, h, w),
@@ -619,10 +619,9 @@ def create_store(
             dimension_names=("sample", row_dim, "x"),
             attributes={"units": spec.units, "long_name": spec.long_name},
         )
-    pgroup = group.create_group("params")
+    group.create_group("params")
     for name, spec in param_specs.items():
-        pgroup.create_array(
-            name,
+        specs[f"params/{name}"] = dict(
             shape=(n,),
             dtype=spec.dtype,
             chunks=(s,),  # one chunk per shard: each shard task owns exactly one chunk file
@@ -631,8 +630,7 @@ def create_store(
             dimension_names=("sample",),
             attributes=_param_attrs(name, spec),
         )
-    group.create_array(
-        "shard_done",
+    specs["shard_done"] = dict(
         shape=(wanted.n_shards,),
         dtype="uint8",
         chunks=(1,),
@@ -642,8 +640,32 @@ def create_store(
         attributes={"units": "1", "long_name": "1 once the shard (one DEM run) is complete",
                     "flag_values": [0, 1], "flag_meanings": "pending done"},
     )
+    _create_arrays(path, specs)
     group.create_group("particles")
     return group
+
+
+def _create_arrays(path: Path, specs: Mapping[str, Mapping[str, Any]]) -> None:
+    """Create the arrays ``path -> create_array keywords`` of the store at ``path``, all at once
+    on zarr's event loop (one at a time, the ~90 metadata writes took 0.4 s of every store's
+    creation)."""
+    import asyncio
+
+    import zarr
+    from zarr.core.sync import sync
+    from zarr.storage import LocalStore
+
+    async def create_all() -> None:
+        store = await LocalStore.open(str(path))
+        results = await asyncio.gather(
+            *(zarr.api.asynchronous.create_array(store, name=name, zarr_format=3, **kw)
+              for name, kw in specs.items()),
+            return_exceptions=True)
+        for r in results:  # every creation has ended: raise the first error
+            if isinstance(r, BaseException):
+                raise r
+
+    sync(create_all())
 
 
 def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.ndarray]]:
