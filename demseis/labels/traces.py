@@ -56,6 +56,10 @@ LINK_GAP_CELLS = 10.0
 #: strands (the finer crest search) closer than this (cells) to a trace are that trace's crest
 STRAND_SEPARATION_CELLS = 2.0
 
+#: strands (and their crest pieces) spanning fewer cells (bounding-box diagonal) are dropped
+STRAND_SPAN_CELLS = 11.0
+STRAND_PERSIST = 1
+
 #: a strand lying mostly within this distance (cells) of a trace belongs to that fault's zone
 STRAND_ZONE_CELLS = 15.0
 
@@ -469,6 +473,7 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
             raise InputError(f"{name} has shape {np.shape(a)}; expected {shape} like strain")
     min_slip = cfg.min_slip_for(cell_m)
     # voids inside the assembly (an opened gap along a fault) are rock for the tracing
+    solid = rock
     rock = ndimage.binary_fill_holes(rock)
     if cohort is not None:
         cohort = np.asarray(cohort)
@@ -492,20 +497,28 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
         fine = shear_field(disp_x_m, disp_y_m, rock, cell_m, cfg.strand_sigma_cells, cohort)
         fcrest = crest_cells(fine, rock, cfg)
         fcrest &= ndimage.distance_transform_edt(~trace) > STRAND_SEPARATION_CELLS
-        fcrest = _long_pieces(fcrest, cfg.min_trace_cells)
+        fcrest = _long_pieces(fcrest, STRAND_SPAN_CELLS)
         strand, fslip = _slipping(fcrest, disp_x_m, disp_y_m, rock, cohort, 1, 2, min_slip, cfg)
-        strand = _long_pieces(strand, cfg.min_trace_cells)
+        if STRAND_PERSIST:
+            # the two sides of a surface are blocks: the jump persists 3-4 cells out (around a
+            # grain that moved against all its neighbours it does not)
+            far, _ = _slipping(fcrest, disp_x_m, disp_y_m, rock, cohort, 3, 4, min_slip, cfg)
+            strand &= far
+        strand = _long_pieces(strand, STRAND_SPAN_CELLS)
         crest_slip[fcrest] = fslip[fcrest]
         crest = crest | fcrest
         slip = np.where(strand, fslip, slip)
         trace = trace | strand
         for _ in range(3 if cfg.min_dip_deg > 0 else 0):
-            # the direction of a strand next to a trace is the pair's: test the dip again
-            t_r, t_c = local_direction(trace)
-            flat = trace & (dip_of(t_r, t_c) < cfg.min_dip_deg)
+            # the direction of a strand next to a trace is the pair's: test the dip again, of
+            # what is labelled (trace_targets leaves out the voids)
+            shown = trace & solid
+            t_r, t_c = local_direction(shown)
+            flat = shown & (dip_of(t_r, t_c) < cfg.min_dip_deg)
             if not flat.any():
                 break
-            trace = remove_small_components(trace & ~flat, cfg.min_trace_cells)
+            trace &= ~flat
+        trace = remove_small_components(trace, cfg.min_trace_cells)
         strand &= trace
     if not trace.any():
         return Traces(trace=np.zeros(shape, bool), instance=np.zeros(shape, np.int32),
