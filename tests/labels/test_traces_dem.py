@@ -30,13 +30,14 @@ def quick_run():
 
 @pytest.mark.slow
 def test_quick_dem_run_labels(quick_run):
-    """Measured at the time of writing (quick run 0, snapshots 1-3): rungs 0.000-0.004, 1 loop
-    (6 after the cross-machine fix redrew the pack: the count is reported, not bounded; what is
-    asserted is that every loop is a lens whose cells all slip). Of the cells whose jump is
-    >= 2 x min_slip_m, 0.57 lay within 2 cells of a 1-cell label (0.48 on the redrawn pack; 0.75
-    with thickness 3, 0.83 with 5): the DEM's shear zones are 10+ cells wide and a trace marks
-    their slip surface, not their width (issue 13 asks for 0.9; this guards against falling
-    further)."""
+    """Measured at the time of writing (quick run 0, snapshots 1-3): rungs 0.000-0.004, 8 loops
+    (the count is reported, not bounded; what is asserted is that every loop is a lens whose
+    cells all slip). Of the cells whose jump is >= 2 x min_slip_m, 0.633 lie within 2 cells of
+    a 1-cell label (0.481 with single-scale traces, strand_sigma_cells = 0: the DEM's shear
+    zones slip on several particle boundaries side by side). Issue 13 asks for 0.9; the true
+    plane of a rigid kinematic fault reaches only 0.71-0.87 under the same definition (median
+    0.80, benchmarks/labels_dem_coverage.py --kinematic), so 0.9 is out of reach of a one-cell
+    line. The guard keeps 0.05 of margin."""
     cfg, grid, snaps = quick_run
     lc = cfg.labels
     min_slip = lc.min_slip_for(grid.cell_m)
@@ -65,4 +66,4 @@ def test_quick_dem_run_labels(quick_run):
         hi, near = jump_coverage(f, jump, rock, min_slip)
         n_hi += hi
         n_near += near
-    assert n_hi > 0 and n_near / n_hi >= 0.45, (n_near / n_hi, f"{loops} loops")
+    assert n_hi > 0 and n_near / n_hi >= 0.58, (n_near / n_hi, f"{loops} loops")
