@@ -19,6 +19,12 @@ method of :mod:`demseis.labels.maps`) turns such blobs into networks with loops 
    sides along the normal, k = 2..``slip_offset_cells``; the largest |u(+k) - u(-k)| is the
    displacement jump (slip, m), averaged along the trace over 5 x 5 cells. A crest cell is fault
    only where that slip is at least ``min_slip_m`` and its dip at least ``min_dip_deg``.
+2b. **Strands.** A DEM shear zone slips on several grain boundaries side by side; steps 1-2
+   are repeated on the displacement smoothed by only ``strand_sigma_cells``: crests of that
+   field more than STRAND_SEPARATION_CELLS from a trace, spanning STRAND_SPAN_CELLS or more,
+   whose jump over 1-2 cells is at least ``min_slip_m`` and persists 3-4 cells out, are traces
+   too (strands); the dip test is repeated on the union, and a strand within
+   STRAND_ZONE_CELLS of a trace takes its fault id.
 3. **Faults.** The kept cells are linked into traces: the skeleton is cut at its junctions, and
    at each junction the two branches that continue each other (directions within
    ``link_angle_deg`` of a straight line) are joined; the others (splays, antithetics, the
@@ -58,7 +64,6 @@ STRAND_SEPARATION_CELLS = 2.0
 
 #: strands (and their crest pieces) spanning fewer cells (bounding-box diagonal) are dropped
 STRAND_SPAN_CELLS = 11.0
-STRAND_PERSIST = 1
 
 #: a strand lying mostly within this distance (cells) of a trace belongs to that fault's zone
 STRAND_ZONE_CELLS = 15.0
@@ -499,11 +504,10 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
         fcrest &= ndimage.distance_transform_edt(~trace) > STRAND_SEPARATION_CELLS
         fcrest = _long_pieces(fcrest, STRAND_SPAN_CELLS)
         strand, fslip = _slipping(fcrest, disp_x_m, disp_y_m, rock, cohort, 1, 2, min_slip, cfg)
-        if STRAND_PERSIST:
-            # the two sides of a surface are blocks: the jump persists 3-4 cells out (around a
-            # grain that moved against all its neighbours it does not)
-            far, _ = _slipping(fcrest, disp_x_m, disp_y_m, rock, cohort, 3, 4, min_slip, cfg)
-            strand &= far
+        # the two sides of a surface are blocks: the jump persists 3-4 cells out (around a
+        # grain that moved against all its neighbours it does not)
+        far, _ = _slipping(fcrest, disp_x_m, disp_y_m, rock, cohort, 3, 4, min_slip, cfg)
+        strand &= far
         strand = _long_pieces(strand, STRAND_SPAN_CELLS)
         crest_slip[fcrest] = fslip[fcrest]
         crest = crest | fcrest
