@@ -7,7 +7,7 @@ rungs (worst snapshot), loops, whether every labelled cell slips >= min_slip_m, 
 ``label_maps`` time per snapshot (seed preset: the figure to compare).
 
     python benchmarks/labels_dem_coverage.py [--runs quick:0,1 seed:0] [--cache DIR] \
-        [--strand-sigma-cells 0] [--kinematic]
+        [--strand-sigma-cells 0] [--kinematic] [--ab-timing]
 
 ``--cache DIR`` pickles the DEM snapshots of each run there and reuses them (the labels are
 what is measured). ``--kinematic`` adds the same coverage on the 32 planar kinematic faults of
@@ -89,6 +89,36 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
             "label_maps_s_median": round(float(np.median(times[1:] or times)), 3)}
 
 
+def ab_timing(preset: str, run: int, cache: str | None, repeats: int = 3) -> dict:
+    """label_maps seconds per snapshot (snapshots 1..), single traces vs strands interleaved
+    in one process so the two see the same machine load; medians and their ratio."""
+    import dataclasses
+
+    from demseis.generator.config import load_config
+    from demseis.generator.pipeline import grid_of
+    from demseis.labels import label_maps, strain_history
+    from demseis.labels.traces import displacement_history
+
+    cfg = load_config(None, preset=preset)
+    grid = grid_of(cfg)
+    configs = {"single": dataclasses.replace(cfg.labels, strand_sigma_cells=0.0),
+               "strands": cfg.labels}
+    snaps = _snapshots(preset, run, cache)
+    hist = strain_history(snaps, cfg.labels)
+    disp = displacement_history(snaps)
+    times: dict = {k: [] for k in configs}
+    for _ in range(repeats):
+        for k in range(1, len(snaps)):
+            for name, lc in configs.items():
+                t0 = time.perf_counter()
+                label_maps(snaps[k], hist[k], grid, lc, displacement=disp[k])
+                times[name].append(time.perf_counter() - t0)
+    med = {k: float(np.median(v)) for k, v in times.items()}
+    return {"preset": preset, "run": run, "repeats": repeats,
+            "single_s": round(med["single"], 3), "strands_s": round(med["strands"], 3),
+            "ratio": round(med["strands"] / med["single"], 2)}
+
+
 def kinematic() -> dict:
     """Coverage of the labels and of the true plane on the planar kinematic faults."""
     from demseis.labels import LabelConfig, label_maps, strain_history
@@ -142,6 +172,8 @@ def main() -> None:
     ap.add_argument("--cache", default=None, help="directory for pickled DEM snapshots")
     ap.add_argument("--strand-sigma-cells", type=float, default=None,
                     help="override labels.strand_sigma_cells (0: single-scale traces, as before)")
+    ap.add_argument("--ab-timing", action="store_true",
+                    help="also time label_maps single traces vs strands, interleaved")
     ap.add_argument("--kinematic", action="store_true",
                     help="also the planar kinematic faults (labels and true plane)")
     args = ap.parse_args()
@@ -157,6 +189,8 @@ def main() -> None:
     out["coverage"] = {p: round(sum(x["coverage"] * x["n_high_jump_cells"] for x in rs)
                                 / max(sum(x["n_high_jump_cells"] for x in rs), 1), 4)
                        for p, rs in by.items()}
+    if args.ab_timing:
+        out["label_maps_ab"] = [ab_timing(r["preset"], r["run"], args.cache) for r in out["runs"]]
     if args.kinematic:
         out["kinematic_planar"] = kinematic()
     print(json.dumps(out))

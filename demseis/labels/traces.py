@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
+from scipy.spatial import cKDTree
 
 from demseis.errors import InputError
 from demseis.labels import _kernels
@@ -175,6 +176,7 @@ def shear_field(disp_x_m: np.ndarray, disp_y_m: np.ndarray, rock: np.ndarray, ce
         w = m.astype(np.float64)
         den = ndimage.gaussian_filter(w, sigma_cells, mode="nearest") if sigma_cells > 0 else w
         grads = []
+        shared = None  # nearest-cell indices of the cells outside the cohort (both components)
         for u in (disp_x_m, disp_y_m):
             uu = np.where(m, u, 0.0)
             num = ndimage.gaussian_filter(uu, sigma_cells, mode="nearest") if sigma_cells > 0 \
@@ -186,8 +188,10 @@ def shear_field(disp_x_m: np.ndarray, disp_y_m: np.ndarray, rock: np.ndarray, ce
             if bad.all():
                 sm = np.zeros_like(sm)
             elif bad.any():
-                idx = ndimage.distance_transform_edt(bad, return_distances=False,
-                                                     return_indices=True)
+                if shared is None or not np.array_equal(shared[0], bad):
+                    shared = (bad, ndimage.distance_transform_edt(
+                        bad, return_distances=False, return_indices=True))
+                idx = shared[1]
                 sm = sm[idx[0], idx[1]]
             d_row, d_col = np.gradient(sm)
             grads.append((d_col / cell_m, -d_row / cell_m))  # d/dx, d/dy (y up)
@@ -376,6 +380,15 @@ def trace_instances(skel: np.ndarray, link_angle_deg: float = 35.0,
     br_r, br_c = np.nonzero(blab)
     br_l = blab[br_r, br_c]
     reach = 8.0
+    tree = cKDTree(np.column_stack([br_r, br_c]).astype(np.float64))
+
+    def within(pr: float, pc: float) -> np.ndarray:
+        """Branch cells within ``reach`` of (pr, pc), in the order of np.nonzero."""
+        cand = np.array(sorted(tree.query_ball_point((pr, pc), reach + 1e-6)), dtype=np.int64)
+        if cand.size == 0:
+            return cand
+        return cand[(br_r[cand] - pr) ** 2 + (br_c[cand] - pc) ** 2 <= reach * reach]
+
     for z, sl in enumerate(ndimage.find_objects(zlab), start=1):
         if sl is None:
             continue
@@ -389,9 +402,10 @@ def trace_instances(skel: np.ndarray, link_angle_deg: float = 35.0,
         if adj.size < 2:
             continue
         dirs = {}
+        around = within(cr, cc)
         for b in adj:
-            sel = (br_l == b) & ((br_r - cr) ** 2 + (br_c - cc) ** 2 <= reach * reach)
-            if not sel.any():
+            sel = around[br_l[around] == b]
+            if not sel.size:
                 continue
             d = np.array([br_r[sel].mean() - cr, br_c[sel].mean() - cc])
             nrm = np.hypot(*d)
@@ -414,22 +428,24 @@ def trace_instances(skel: np.ndarray, link_angle_deg: float = 35.0,
         e_lab = blab[ends[:, 0], ends[:, 1]]
         e_dir = np.zeros((ends.shape[0], 2))
         for q, (r_, c_) in enumerate(ends):  # direction from the piece into the gap
-            sel = (br_l == e_lab[q]) & ((br_r - r_) ** 2 + (br_c - c_) ** 2 <= reach * reach)
+            sel = within(float(r_), float(c_))
+            sel = sel[br_l[sel] == e_lab[q]]
             d = np.array([r_ - br_r[sel].mean(), c_ - br_c[sel].mean()])
             nrm = np.hypot(*d)
             e_dir[q] = d / nrm if nrm > 0 else 0.0
         cos_gap = np.cos(np.radians(link_angle_deg))
-        for a in range(ends.shape[0]):
-            for b in range(a + 1, ends.shape[0]):
-                if e_lab[a] == e_lab[b]:
-                    continue
-                v = (ends[b] - ends[a]).astype(np.float64)
-                dist = np.hypot(*v)
-                if dist == 0 or dist > gap_cells:
-                    continue
-                v /= dist
-                if e_dir[a] @ v >= cos_gap and -(e_dir[b] @ v) >= cos_gap:
-                    parent[find(int(e_lab[a]))] = find(int(e_lab[b]))
+        # candidate pairs (a < b, lexicographic: the order fixes the union-find roots)
+        close = sorted(cKDTree(ends.astype(np.float64)).query_pairs(gap_cells + 1e-6))
+        for a, b in close:
+            if e_lab[a] == e_lab[b]:
+                continue
+            v = (ends[b] - ends[a]).astype(np.float64)
+            dist = np.hypot(*v)
+            if dist == 0 or dist > gap_cells:
+                continue
+            v /= dist
+            if e_dir[a] @ v >= cos_gap and -(e_dir[b] @ v) >= cos_gap:
+                parent[find(int(e_lab[a]))] = find(int(e_lab[b]))
     roots = np.array([find(i) for i in range(nb + 1)])
     lab = roots[blab]
     lab[~body] = 0
@@ -503,10 +519,12 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
         fcrest = crest_cells(fine, rock, cfg)
         fcrest &= ndimage.distance_transform_edt(~trace) > STRAND_SEPARATION_CELLS
         fcrest = _long_pieces(fcrest, STRAND_SPAN_CELLS)
-        strand, fslip = _slipping(fcrest, disp_x_m, disp_y_m, rock, cohort, 1, 2, min_slip, cfg)
+        f_dir = local_direction(fcrest)
+        strand, fslip = _slipping(fcrest, disp_x_m, disp_y_m, rock, cohort, 1, 2, min_slip, cfg,
+                                  f_dir)
         # the two sides of a surface are blocks: the jump persists 3-4 cells out (around a
         # grain that moved against all its neighbours it does not)
-        far, _ = _slipping(fcrest, disp_x_m, disp_y_m, rock, cohort, 3, 4, min_slip, cfg)
+        far, _ = _slipping(fcrest, disp_x_m, disp_y_m, rock, cohort, 3, 4, min_slip, cfg, f_dir)
         strand &= far
         strand = _long_pieces(strand, STRAND_SPAN_CELLS)
         crest_slip[fcrest] = fslip[fcrest]
@@ -552,7 +570,8 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
 
 def _slipping(crest: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray, rock: np.ndarray,
               cohort: np.ndarray | None, k_min: int, k_max: int, min_slip: float,
-              cfg: LabelConfig) -> tuple[np.ndarray, np.ndarray]:
+              cfg: LabelConfig, direction: tuple[np.ndarray, np.ndarray] | None = None
+              ) -> tuple[np.ndarray, np.ndarray]:
     """Crest cells that slip (step 2 of the module docstring) and the slip of every crest cell.
 
     Returns (trace cells: slip >= ``min_slip``, dip >= ``min_dip_deg``, pieces of at least
@@ -561,7 +580,7 @@ def _slipping(crest: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray, roc
     """
     if not crest.any():
         return np.zeros(crest.shape, dtype=bool), np.full(crest.shape, np.nan)
-    t_r, t_c = local_direction(crest)
+    t_r, t_c = local_direction(crest) if direction is None else direction
     jump = _jump(crest, t_r, t_c, disp_x_m, disp_y_m, rock, k_max, cohort, k_min=k_min)
     slip = _along_trace_mean(crest, np.nan_to_num(jump[..., 0], nan=0.0),
                              np.isfinite(jump[..., 0]))
