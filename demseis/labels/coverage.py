@@ -2,7 +2,7 @@
 
 The displacement jump at a cell is computed here from the particles, independently of the
 trace extraction of :mod:`demseis.labels.traces`: the element displacements (since first
-appearance) are rasterised with :func:`demseis.seismic.raster.rasterise` (mean over the disks
+appearance) are rasterised with :func:`demseis.seismic.rasterise` (mean over the disks
 containing the cell centre) and the jump is the largest |u(p + d) - u(p - d)| over the offsets
 d with |d_row|, |d_col| <= ``reach`` cells whose two cells are rock of the same deposition
 cohort (displacements of different cohorts have different references, so their difference is
@@ -15,7 +15,6 @@ import numpy as np
 from scipy import ndimage
 
 from demseis.labels.maps import rasterise_strain
-from demseis.seismic.raster import rasterise
 
 
 def jump_field(snapshot, displacement: np.ndarray, birth: np.ndarray, grid,
@@ -33,6 +32,8 @@ def jump_field(snapshot, displacement: np.ndarray, birth: np.ndarray, grid,
     -------
     jump : (nz, nx) float64 (0 where no offset pair is measurable); rock : (nz, nx) bool.
     """
+    from demseis.seismic import rasterise
+
     u, _ = rasterise(snapshot.xy, snapshot.radius, displacement, grid)
     _, owner = rasterise_strain(snapshot.xy, snapshot.radius, np.zeros(snapshot.n), grid)
     rock = owner >= 0
