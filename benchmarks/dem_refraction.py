@@ -28,7 +28,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from demseis.dem import BRITTLE, NormalFault, build_assembly, settle_pack, simulate  # noqa
-from demseis.dem.measure import fault_crossings  # noqa
+from demseis.dem.measure import unit_dips  # noqa
 from demseis.dem.strata import is_strong, layer_materials  # noqa
 from _dem_common import finish  # noqa: E402  (benchmarks/ is on sys.path)
 
@@ -55,24 +55,23 @@ def main(argv=None) -> int:
     asm = build_assembly(W, H, n_layers=N_LAYERS, pack=pack)
     snaps = simulate(asm, NormalFault(), base, n_snapshots=6, rng=args.seed,
                      layer_materials=mats)
-    last = snaps[-1]
-    xs, ys = fault_crossings(last, range(N_LAYERS), W / 2, search_m=1200.0)
-    dips = {"strong": [], "weak": []}
-    for first in range(0, N_LAYERS, u):
-        ks = [k for k in range(first, min(first + u, N_LAYERS)) if np.isfinite(xs[k])]
-        if len(ks) < 2:
-            continue
-        # dip of the least-squares line x(y) through the unit's crossings
-        slope = np.polyfit(ys[ks], xs[ks], 1)[0]
-        dips["strong" if is_strong(lith[first]) else "weak"].append(
-            math.degrees(math.atan2(1.0, abs(slope))))
+    units = [tuple(range(f, min(f + u, N_LAYERS))) for f in range(0, N_LAYERS, u)]
+    strong = np.array([is_strong(lith[un[0]]) for un in units])
+    per_snap = []
+    for snap in snaps[1:]:
+        dip, _, mis = unit_dips(snaps[0], snap, units, W / 2)
+        ok = np.isfinite(dip)
+        per_snap.append({"throw_m": round(float(snap.throw_m), 1),
+                         "dips_deg": [round(float(d), 1) for d in dip],
+                         "misfit": [round(float(m), 2) for m in mis],
+                         "mean_strong_deg": round(float(np.mean(dip[ok & strong])), 1),
+                         "mean_weak_deg": round(float(np.mean(dip[ok & ~strong])), 1)})
+    last = per_snap[-1]
     res = {"benchmark": "dem_refraction", "contrast": args.contrast, "unit_layers": u,
-           "base_cohesion_n": base.cohesion_n,
-           "n_strong": len(dips["strong"]), "n_weak": len(dips["weak"]),
-           "mean_dip_strong_deg": round(float(np.mean(dips["strong"])), 1),
-           "mean_dip_weak_deg": round(float(np.mean(dips["weak"])), 1),
-           "dips_strong": [round(d, 1) for d in dips["strong"]],
-           "dips_weak": [round(d, 1) for d in dips["weak"]],
+           "base_cohesion_n": base.cohesion_n, "strong_units": strong.astype(int).tolist(),
+           "mean_dip_strong_deg": last["mean_strong_deg"],
+           "mean_dip_weak_deg": last["mean_weak_deg"],
+           "per_snapshot": per_snap,
            "cpu_s": round(time.process_time() - t0, 1)}
     res["difference_deg"] = round(res["mean_dip_strong_deg"] - res["mean_dip_weak_deg"], 1)
     return finish(res, snaps, args, f"strong/weak units of {u} layers, contrast "
