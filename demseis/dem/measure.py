@@ -5,7 +5,10 @@
 - :func:`displacement_jump`: the displacement of the hanging-wall side minus the footwall side
   of a fault, and its slip sense;
 - :func:`section_length`: the horizontal extent of the pre-kinematic section (shortening or
-  lengthening).
+  lengthening);
+- :func:`step_line` / :func:`unit_dips` / :func:`strong_weak_dips`: the dip of a fault within
+  each unit of layers, fitted in reference coordinates as the line that best splits the
+  displacement field (refraction through a strong-weak alternation).
 """
 
 from __future__ import annotations
@@ -288,3 +291,33 @@ def unit_dips(ref: Snapshot, cur: Snapshot, units: list[tuple[int, ...]], x_m: f
         cot = math.cos(math.radians(dip)) / math.sin(math.radians(dip))
         x_at = x_mid - a * (y1 - 0.5 * (y0 + y1)) * cot
     return out[0], out[1], out[2]
+
+
+def strong_weak_dips(ref: Snapshot, cur: Snapshot, units: list[tuple[int, ...]],
+                     strong: np.ndarray, x_m: float, *, dip_direction: str = "right"
+                     ) -> tuple[float, float, np.ndarray]:
+    """Mean fault dip in the strong and in the weak units (refraction), from :func:`unit_dips`.
+
+    A unit's dip is its line's angle folded to 0..90 deg (a segment leaning back over the
+    hanging wall at 100 deg dips 80 deg the other way); units without a fit are skipped.
+
+    Parameters
+    ----------
+    ref, cur : reference and current snapshots of one run.
+    units : layer indices of each unit, bottom to top.
+    strong : (len(units),) bool, the competent units.
+    x_m, dip_direction : as in :func:`unit_dips`.
+
+    Returns
+    -------
+    (mean dip of the strong units, mean dip of the weak units, per-unit angles 0..180 deg).
+    """
+    strong = np.asarray(strong, dtype=bool)
+    if strong.shape != (len(units),):
+        raise InputError(f"strong has shape {strong.shape}; expected ({len(units)},)")
+    angle, _, _ = unit_dips(ref, cur, units, x_m, dip_direction=dip_direction)
+    dip = 90.0 - np.abs(90.0 - angle)
+    ok = np.isfinite(dip)
+    if not (ok & strong).any() or not (ok & ~strong).any():
+        raise InputError("no strong or no weak unit has a fitted fault")
+    return float(dip[ok & strong].mean()), float(dip[ok & ~strong].mean()), angle
