@@ -13,7 +13,9 @@ shale up to about 10x, Young's modulus 1-5x, friction coefficient 0.6-0.85 again
 clay-rich shale. The stiffness contrast is what makes faults refract (steeper in the stiff,
 strong layers: docs/dem.md, "Refraction"); cohesion alone does not.
 
-``s = 1`` gives every layer the base material (uniform mechanics).
+``s = 1`` gives every layer the base material (uniform mechanics). Each value is clipped to
+its field's declared range (:mod:`demseis.parameters`), so a base material at the edge of its
+range still gives layers the DEM accepts.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from collections.abc import Sequence
 
 from demseis.dem.types import Material
 from demseis.errors import InputError
+from demseis.parameters import PARAMS
 
 STRONG_LITHOLOGIES = ("sandstone", "limestone", "carbonate", "dolomite")
 
@@ -46,11 +49,17 @@ def layer_materials(lithologies: Sequence[str], base: Material, contrast: float
     if not (math.isfinite(contrast) and contrast >= 1.0):
         raise InputError(f"strength contrast={contrast!r} must be >= 1")
     root = math.sqrt(contrast)
-    strong = dataclasses.replace(base, cohesion_n=base.cohesion_n * root)
-    weak = dataclasses.replace(base, cohesion_n=base.cohesion_n / root,
-                               friction=base.friction / min(root, 2.0),
-                               kn_n_m=base.kn_n_m / min(contrast, 4.0))
+    strong = dataclasses.replace(base, cohesion_n=_clip("cohesion_n", base.cohesion_n * root))
+    weak = dataclasses.replace(base, cohesion_n=_clip("cohesion_n", base.cohesion_n / root),
+                               friction=_clip("friction", base.friction / min(root, 2.0)),
+                               kn_n_m=_clip("kn_n_m", base.kn_n_m / min(contrast, 4.0)))
     return [strong if is_strong(name) else weak for name in lithologies]
+
+
+def _clip(name: str, value: float) -> float:
+    """``value`` clipped to the declared range of parameter ``name``."""
+    p = PARAMS[name]
+    return min(max(value, float(p.lo)), float(p.hi))
 
 
 def alternation(n_layers: int, unit_layers: int, strong: str = "sandstone",
