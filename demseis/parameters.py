@@ -183,7 +183,8 @@ _DECLARED: tuple[Param, ...] = (
            "depth)"),
     _p("strength_contrast", float, "run", 1.0, 1.0, 16.0,
        doc="mechanical stratigraphy: cohesion ratio of strong (sandstone, limestone) to weak "
-           "(shale) layers; 1 = uniform mechanics (demseis.dem.strata)"),
+           "(shale) layers, which are also up to 4x softer and have up to half the friction; "
+           "1 = uniform mechanics (demseis.dem.strata)"),
     # ---- per run: the kinematic engine only ([model] engine = "kinematic") ----------------
     _p("fold_amplitude_m", float, "run", 0.0, 0.0, 1.0e4, unit="m",
        doc="kinematic engine: amplitude of the folding of the layers before faulting (0 = flat)"),

@@ -5,6 +5,7 @@ Nothing here is mechanics: faulting is geometry. One planar normal fault model s
 :func:`kinematic_fault` moves the hanging wall down-dip (rigidly, or spread over a shear zone).
 
 - :func:`disk_pack`: a dense polydisperse disk pack (geometric, not mechanically settled);
+- :func:`refracted_fault`: a fault whose dip changes from layer to layer (refraction imposed);
 - :func:`faulted_sequence`: :class:`~demseis.types.Snapshot` s of a layered pack cut by the fault
   at increasing throw, with growth layers filling the accommodation (a stand-in for a DEM run);
 - :func:`faulted_section`: a seismic-like image (sparse reflectivity convolved with a Ricker
@@ -162,6 +163,41 @@ def kinematic_fault(
     else:
         frac = (d > 0).astype(np.float64)
     return xy + (slip * frac)[:, None] * down_dip[None, :]
+
+
+def refracted_fault(xy: np.ndarray, *, x_m: float, y_edges_m: np.ndarray,
+                    dips_deg: np.ndarray, throw_m: float, zone_width_m: float = 0.0
+                    ) -> np.ndarray:
+    """Element centres after a vertical throw on a right-dipping fault that refracts.
+
+    The fault leaves ``(x_m, y_edges_m[0])`` and crosses the band ``[y_edges_m[k],
+    y_edges_m[k + 1]]`` at ``dips_deg[k]`` (a piecewise-straight trace, steeper in some layers
+    than in others). Every point on its hanging-wall side (larger x) moves down by ``throw_m``;
+    with ``zone_width_m`` the motion ramps linearly over that horizontal width centred on the
+    trace. Vertical motion fits any trace shape, so nothing overlaps or opens.
+
+    Returns
+    -------
+    (n, 2) float64 displaced centres (points above or below the bands keep the end dips).
+    """
+    edges = np.asarray(y_edges_m, dtype=np.float64)
+    dips = np.asarray(dips_deg, dtype=np.float64)
+    if edges.ndim != 1 or dips.shape != (edges.size - 1,) or np.any(np.diff(edges) <= 0):
+        raise InputError("y_edges_m must increase and dips_deg have one value per band")
+    if np.any((dips <= 0) | (dips >= 180)) or throw_m < 0 or zone_width_m < 0:
+        raise InputError("dips in (0, 180), throw_m >= 0 and zone_width_m >= 0 required")
+    cot = 1.0 / np.tan(np.radians(dips))
+    x_edges = x_m - np.concatenate([[0.0], np.cumsum(np.diff(edges) * cot)])
+    xy = np.asarray(xy, dtype=np.float64)
+    y = xy[:, 1]
+    k = np.clip(np.searchsorted(edges, y, side="right") - 1, 0, dips.size - 1)
+    x_trace = x_edges[k] - (y - edges[k]) * cot[k]
+    d = xy[:, 0] - x_trace
+    frac = (np.clip(d / zone_width_m + 0.5, 0.0, 1.0) if zone_width_m > 0
+            else (d > 0).astype(np.float64))
+    out = xy.copy()
+    out[:, 1] -= throw_m * frac
+    return out
 
 
 def listric_fault(xy: np.ndarray, *, centre_xy: tuple[float, float], radius_m: float,

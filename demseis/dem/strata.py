@@ -4,11 +4,18 @@ Competent lithologies (sandstone, limestone, carbonate, dolomite) are *strong*; 
 (shale, mudstone, ...) are *weak*. With a strength contrast ``s >= 1`` and a base Material:
 
 - strong: cohesion ``C0 * sqrt(s)``, friction ``mu``, Kn ``Kn`` (the base stiffness);
-- weak: cohesion ``C0 / sqrt(s)``, friction ``mu * (1 - 0.25 (1 - 1/s))`` (at most 25% lower),
-  Kn ``Kn / 2`` (softer; dt is set by the largest Kn, so this costs nothing);
+- weak: cohesion ``C0 / sqrt(s)``, friction ``mu / min(sqrt(s), 2)`` (at most halved), Kn
+  ``Kn / min(s, 4)`` (at most 4x softer; dt is set by the largest Kn, so this costs nothing);
 - the bond strain r0 of both is the base's.
 
-``s = 1`` gives every layer the base material (uniform mechanics).
+The ratios stay within what rocks show: unconfined strength of sandstone and limestone against
+shale up to about 10x, Young's modulus 1-5x, friction coefficient 0.6-0.85 against 0.2-0.4 for
+clay-rich shale. The stiffness contrast is what makes faults refract (steeper in the stiff,
+strong layers: docs/dem.md, "Refraction"); cohesion alone does not.
+
+``s = 1`` gives every layer the base material (uniform mechanics). Each value is clipped to
+its field's declared range (:mod:`demseis.parameters`), so a base material at the edge of its
+range still gives layers the DEM accepts.
 """
 
 from __future__ import annotations
@@ -19,6 +26,7 @@ from collections.abc import Sequence
 
 from demseis.dem.types import Material
 from demseis.errors import InputError
+from demseis.parameters import PARAMS
 
 STRONG_LITHOLOGIES = ("sandstone", "limestone", "carbonate", "dolomite")
 
@@ -41,8 +49,23 @@ def layer_materials(lithologies: Sequence[str], base: Material, contrast: float
     if not (math.isfinite(contrast) and contrast >= 1.0):
         raise InputError(f"strength contrast={contrast!r} must be >= 1")
     root = math.sqrt(contrast)
-    strong = dataclasses.replace(base, cohesion_n=base.cohesion_n * root)
-    weak = dataclasses.replace(base, cohesion_n=base.cohesion_n / root,
-                               friction=base.friction * (1 - 0.25 * (1 - 1 / contrast)),
-                               kn_n_m=base.kn_n_m / 2 if contrast > 1 else base.kn_n_m)
+    strong = dataclasses.replace(base, cohesion_n=_clip("cohesion_n", base.cohesion_n * root))
+    weak = dataclasses.replace(base, cohesion_n=_clip("cohesion_n", base.cohesion_n / root),
+                               friction=_clip("friction", base.friction / min(root, 2.0)),
+                               kn_n_m=_clip("kn_n_m", base.kn_n_m / min(contrast, 4.0)))
     return [strong if is_strong(name) else weak for name in lithologies]
+
+
+def _clip(name: str, value: float) -> float:
+    """``value`` clipped to the declared range of parameter ``name``."""
+    p = PARAMS[name]
+    return min(max(value, float(p.lo)), float(p.hi))
+
+
+def alternation(n_layers: int, unit_layers: int, strong: str = "sandstone",
+                weak: str = "shale") -> list[str]:
+    """Lithology names of ``n_layers`` layers in units of ``unit_layers`` alternating strong
+    and weak from the base (the first unit is strong)."""
+    if n_layers < 1 or unit_layers < 1:
+        raise InputError(f"n_layers={n_layers} and unit_layers={unit_layers} must be >= 1")
+    return [strong if (k // unit_layers) % 2 == 0 else weak for k in range(n_layers)]

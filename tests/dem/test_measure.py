@@ -86,3 +86,63 @@ def test_fault_crossings_follow_a_dipping_fault():
                                atol=13.0)
     dip = np.degrees(np.arctan2(ys[1] - ys[0], abs(xs[1] - xs[0])))
     assert dip == pytest.approx(60.0, abs=5.0)
+
+
+# ---- dip of a fault per unit of layers (refraction), on a kinematic fault whose dip is imposed
+
+def _refracted(dips, zone_m, throw_m=100.0, x_m=3500.0, n_layers=24, unit=2, seed=1):
+    from demseis.testing import layered_pack, refracted_fault
+
+    h = 2770.0
+    ref = layered_pack(5000.0, h, n_layers, rng=np.random.default_rng(seed))
+    edges = np.linspace(0.0, h, n_layers // unit + 1)
+    xy = refracted_fault(ref.xy, x_m=x_m, y_edges_m=edges, dips_deg=dips, throw_m=throw_m,
+                         zone_width_m=zone_m)
+    cur = Snapshot(1, 0, throw_m, ref.ids, xy, ref.radius, ref.layer, ref.deposited)
+    units = [tuple(range(k, k + unit)) for k in range(0, n_layers, unit)]
+    return ref, cur, units
+
+
+@pytest.mark.parametrize("zone_m", [60.0, 150.0])
+def test_unit_dips_recover_an_imposed_refraction(zone_m):
+    from demseis.dem.measure import unit_dips
+
+    dips = np.where(np.arange(12) % 2 == 0, 65.0, 50.0)  # strong units first, from the base
+    ref, cur, units = _refracted(dips, zone_m)
+    got, x_mid, misfit = unit_dips(ref, cur, units, 3500.0)
+    assert np.all(np.isfinite(got)) and np.all(misfit < 0.05)
+    strong, weak = got[0::2].mean(), got[1::2].mean()
+    assert strong == pytest.approx(65.0, abs=2.0)
+    assert weak == pytest.approx(50.0, abs=2.0)
+    assert strong - weak == pytest.approx(15.0, abs=2.5)
+    assert np.all(np.abs(got - dips) < 6.0)  # each unit on its own (about 7 rows of elements)
+
+
+def test_unit_dips_of_a_straight_fault_show_no_refraction():
+    from demseis.dem.measure import unit_dips
+
+    ref, cur, units = _refracted(np.full(12, 55.0), 60.0)
+    got, _, _ = unit_dips(ref, cur, units, 3500.0)
+    assert got.mean() == pytest.approx(55.0, abs=1.5)
+    assert abs(got[0::2].mean() - got[1::2].mean()) < 2.0
+
+
+def test_step_line_mirrors_for_a_left_dipping_fault():
+    from demseis.dem.measure import step_line
+
+    ref, cur, units = _refracted(np.full(12, 60.0), 60.0)
+    sel = np.isin(ref.layer, (10, 11)) & (np.abs(ref.xy[:, 0] - 3000.0) < 400.0)
+    dip_r, x_r, _ = step_line(ref.xy[sel], cur.xy[sel] - ref.xy[sel], "right")
+    mirror = np.array([-1.0, 1.0])
+    dip_l, x_l, _ = step_line(ref.xy[sel] * mirror, (cur.xy[sel] - ref.xy[sel]) * mirror, "left")
+    assert dip_r == pytest.approx(60.0, abs=3.0)
+    assert dip_l == pytest.approx(dip_r, abs=1e-9) and x_l == pytest.approx(-x_r, abs=1e-6)
+
+
+def test_step_line_refuses_a_field_without_a_jump():
+    from demseis.dem.measure import step_line
+    from demseis.errors import InputError
+
+    xy = np.random.default_rng(0).uniform(0, 500, (200, 2))
+    with pytest.raises(InputError, match="no displacement jump"):
+        step_line(xy, np.zeros_like(xy))
