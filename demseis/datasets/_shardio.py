@@ -185,9 +185,9 @@ class RawShardReader:
     replaced or written since is mapped and verified afresh. The checksum pass reads the whole
     chunk from memory (55-75 us per 554 kB section from the page cache, measured on 2 shared
     cores: about what copying a 256x256 crop costs), which is what re-checking on every read
-    cost. Damage that reaches a
-    mapped file without going through the file system (a failing disk under an evicted page) is
-    seen by the next process or reader, and by ``demseis validate``, not by this one.
+    cost. Damage that reaches a mapped file without going through the file system (a failing
+    disk under an evicted page) is seen by the next process or reader, and by
+    ``demseis validate``, not by this one.
 
     Parameters
     ----------
