@@ -10,7 +10,13 @@ overhead (compute time × workers − task time: scheduling, worker imports and 
 in the first task, and imbalance at the end), and the tail (compute end − the first worker to
 go idle). The machine is shared: compare the ratios, not the absolute numbers.
 
-    python benchmarks/sweep.py [--repeats 3] [--preset quick] [--workers 1,2]
+``--ceiling`` also measures what the hardware allows, without dask or a store: one run's
+computation (``run_shard``) timed alone in one process, then the same computation in N
+processes at once; ``ceiling_N = N x t_alone / t_together`` is the best speedup N workers could
+reach on this machine (cores that share caches, memory bandwidth or a hypervisor's time slow
+each other down).
+
+    python benchmarks/sweep.py [--repeats 3] [--preset quick] [--workers 1,2] [--ceiling]
 """
 
 from __future__ import annotations
@@ -49,12 +55,51 @@ def _profile(s, workers: int) -> dict[str, float]:
     return out
 
 
+def _timed_run(cfg_dict: dict, run: int, barrier) -> float:
+    """Seconds of ``run_shard(run)`` in this process, after a warm-up run (Numba caches)."""
+    import time
+
+    from demseis.generator.config import parse_config
+    from demseis.generator.pipeline import run_shard
+
+    cfg = parse_config(cfg_dict)
+    run_shard(cfg, run)
+    if barrier is not None:
+        barrier.wait()  # start the timed runs together
+    t0 = time.perf_counter()
+    run_shard(cfg, run)
+    return time.perf_counter() - t0
+
+
+def _ceiling(cfg, n: int, repeats: int) -> dict[str, float]:
+    """Median ``n x t_alone / t_together`` over ``repeats`` rounds (see the module doc)."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("spawn")
+    ratios, alone, together = [], [], []
+    for rep in range(repeats):
+        with ctx.Pool(1) as pool:
+            t1 = pool.apply(_timed_run, (cfg.to_dict(), rep % cfg.sweep.n_runs, None))
+        with ctx.Manager() as manager:
+            barrier = manager.Barrier(n)
+            with ctx.Pool(n) as pool:
+                tn = max(pool.starmap(_timed_run, [(cfg.to_dict(), rep % cfg.sweep.n_runs, barrier)] * n))
+        alone.append(t1)
+        together.append(tn)
+        ratios.append(n * t1 / tn)
+    return {f"ceiling_{n}": round(statistics.median(ratios), 3),
+            "ceiling_run_alone_s": round(statistics.median(alone), 3),
+            f"ceiling_run_{n}_together_s": round(statistics.median(together), 3)}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--preset", default="quick")
     ap.add_argument("--config", default=None, help="a TOML config layered on --preset")
     ap.add_argument("--workers", default="1,2", help="comma-separated worker counts")
+    ap.add_argument("--ceiling", action="store_true",
+                    help="also measure the hardware's best speedup for the largest worker count")
     args = ap.parse_args()
     cfg = load_config(args.config, preset=args.preset)
     counts = [int(w) for w in args.workers.split(",")]
@@ -81,6 +126,8 @@ def main() -> None:
         line[f"speedup_{w}_vs_{base}"] = round(med[w]["e2e_samples_per_s"] / med[base]["e2e_samples_per_s"], 3)
         line[f"compute_speedup_{w}_vs_{base}"] = round(
             med[w]["compute_samples_per_s"] / med[base]["compute_samples_per_s"], 3)
+    if args.ceiling:
+        line.update(_ceiling(cfg, max(counts), args.repeats))
     print(json.dumps(line))
 
 

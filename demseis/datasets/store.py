@@ -328,6 +328,20 @@ class StoreLayout:
         return diffs
 
 
+def _array_members(group) -> dict:
+    """Every array of the store's root and of ``params``, path -> ``zarr.Array`` (e.g.
+    ``"seismic"``, ``"params/dip_deg"``), their metadata read at once (two ``members()`` calls;
+    one ``group[name]`` at a time, the ~90 reads took 0.1-0.2 s, paid by every shard write)."""
+    import zarr
+
+    members = dict(group.members())
+    out = {k: v for k, v in members.items() if isinstance(v, zarr.Array)}
+    if isinstance(members.get("params"), zarr.Group):
+        out.update({f"params/{k}": v for k, v in members["params"].members()
+                    if isinstance(v, zarr.Array)})
+    return out
+
+
 def store_layout(group) -> StoreLayout:
     """Derive the :class:`StoreLayout` of an open demseis store group.
 
@@ -336,17 +350,21 @@ def store_layout(group) -> StoreLayout:
     StoreError
         If ``shard_done`` or every sample array is missing, or arrays disagree in shape.
     """
-    keys = set(group.array_keys())
-    if "shard_done" not in keys:
+    return _layout_of(_array_members(group))
+
+
+def _layout_of(members: Mapping[str, Any]) -> StoreLayout:
+    """:func:`store_layout` from the arrays :func:`_array_members` read."""
+    if "shard_done" not in members:
         raise StoreError("store has no 'shard_done' array: it is incomplete or not a demseis store")
-    n_shards = int(group["shard_done"].shape[0])
+    n_shards = int(members["shard_done"].shape[0])
     arrays: dict[str, np.dtype] = {}
     shape = None
     samples_per_shard = None
     for name in SAMPLE_ARRAYS:
-        if name not in keys:
+        if name not in members:
             continue
-        arr = group[name]
+        arr = members[name]
         arrays[name] = np.dtype(arr.dtype)
         s = int(arr.shards[0]) if arr.shards is not None else int(arr.chunks[0])
         sh = tuple(int(v) for v in arr.shape[1:])
@@ -360,10 +378,9 @@ def store_layout(group) -> StoreLayout:
     if not arrays:
         raise StoreError("store has no sample arrays (seismic, fault, ...)")
     params: dict[str, np.dtype] = {}
-    if "params" in set(group.group_keys()):
-        pgroup = group["params"]
-        for name in sorted(pgroup.array_keys()):
-            params[name] = np.dtype(pgroup[name].dtype)
+    for name in sorted(members):
+        if name.startswith("params/"):
+            params[name[len("params/"):]] = np.dtype(members[name].dtype)
     return StoreLayout(n_shards, int(samples_per_shard), shape, arrays, params)
 
 
@@ -589,10 +606,10 @@ def create_store(
                            fill_value=float("nan"), compressors=_small_compressors(),
                            dimension_names=(name,),
                            attributes={"units": units, "long_name": long_name})[...] = values
+    specs: dict[str, dict[str, Any]] = {}  # array path -> create_array keywords
     for name, dtype in array_dtypes.items():
         spec = SAMPLE_ARRAY_SPECS[name]
-        group.create_array(
-            name,
+        specs[name] = dict(
             shape=(n, h, w),
             dtype=dtype,
             chunks=(1, h, w),
@@ -602,10 +619,9 @@ def create_store(
             dimension_names=("sample", row_dim, "x"),
             attributes={"units": spec.units, "long_name": spec.long_name},
         )
-    pgroup = group.create_group("params")
+    group.create_group("params")
     for name, spec in param_specs.items():
-        pgroup.create_array(
-            name,
+        specs[f"params/{name}"] = dict(
             shape=(n,),
             dtype=spec.dtype,
             chunks=(s,),  # one chunk per shard: each shard task owns exactly one chunk file
@@ -614,8 +630,7 @@ def create_store(
             dimension_names=("sample",),
             attributes=_param_attrs(name, spec),
         )
-    group.create_array(
-        "shard_done",
+    specs["shard_done"] = dict(
         shape=(wanted.n_shards,),
         dtype="uint8",
         chunks=(1,),
@@ -625,8 +640,32 @@ def create_store(
         attributes={"units": "1", "long_name": "1 once the shard (one DEM run) is complete",
                     "flag_values": [0, 1], "flag_meanings": "pending done"},
     )
+    _create_arrays(path, specs)
     group.create_group("particles")
     return group
+
+
+def _create_arrays(path: Path, specs: Mapping[str, Mapping[str, Any]]) -> None:
+    """Create the arrays ``path -> create_array keywords`` of the store at ``path``, all at once
+    on zarr's event loop (one at a time, the ~90 metadata writes took 0.4 s of every store's
+    creation)."""
+    import asyncio
+
+    import zarr
+    from zarr.core.sync import sync
+    from zarr.storage import LocalStore
+
+    async def create_all() -> None:
+        store = await LocalStore.open(str(path))
+        results = await asyncio.gather(
+            *(zarr.api.asynchronous.create_array(store, name=name, zarr_format=3, **kw)
+              for name, kw in specs.items()),
+            return_exceptions=True)
+        for r in results:  # every creation has ended: raise the first error
+            if isinstance(r, BaseException):
+                raise r
+
+    sync(create_all())
 
 
 def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.ndarray]]:
@@ -716,9 +755,36 @@ def _as_param_array(name: str, value: Any, dtype: np.dtype, n: int) -> np.ndarra
     return out
 
 
-def _write_array(arr, sel: slice, data: np.ndarray) -> None:
-    """Write ``data`` into ``arr[sel]`` (one whole shard / chunk: one atomic file)."""
-    arr[sel] = data
+async def _write_array(arr, sel: slice, data: np.ndarray) -> None:
+    """Write ``data`` into ``arr[sel]`` of the async array ``arr`` (one whole shard / chunk: one
+    atomic file)."""
+    await arr.setitem(sel, data)
+
+
+def _write_arrays(writes: Mapping[str, tuple[Any, np.ndarray]], sel: slice) -> None:
+    """Write ``data`` into ``array[sel]`` for every ``name -> (zarr.Array, data)`` of ``writes``,
+    all at once on zarr's event loop; returns when every write has ended and raises the first
+    error.
+
+    A shard touches about 90 arrays (most of them small parameter arrays); one by one, each
+    write waits in turn for its file write, which made ``write_shard`` take about 0.5 s on a
+    `quick` shard. Gathered, the waits overlap (with the metadata read once, by
+    :func:`_array_members`): about 0.15 s, measured with the shard writes of a `quick` store on
+    the development machine.
+    """
+    import asyncio
+
+    from zarr.core.sync import sync
+
+    async def write_all() -> None:
+        results = await asyncio.gather(
+            *(_write_array(arr.async_array, sel, data) for arr, data in writes.values()),
+            return_exceptions=True)
+        for r in results:  # every write has ended: raise the first error
+            if isinstance(r, BaseException):
+                raise r
+
+    sync(write_all())
 
 
 def write_particles(path: str | Path, run_id: int, snapshots: Sequence[Snapshot]) -> None:
@@ -858,8 +924,8 @@ def write_shard(
     StoreError
         The store is not a demseis store of this schema version.
     """
-    group = open_store(path, "r+")
-    layout = store_layout(group)
+    members = _array_members(open_store(path, "r+"))
+    layout = _layout_of(members)
     k = int(shard_index)
     if k != shard_index or not 0 <= k < layout.n_shards:
         raise InputError(f"shard_index must be in [0, {layout.n_shards}), got {shard_index!r}")
@@ -887,7 +953,7 @@ def write_shard(
     if run_id is None:
         run_id = k
 
-    done = group["shard_done"]
+    done = members["shard_done"]
     # a rewrite must not leave a done flag over half-new data (writing the fill value deletes
     # the chunk file without reading it, so a damaged flag is no obstacle)
     done[k] = 0
@@ -896,9 +962,8 @@ def write_shard(
         # zarr merges a write into an existing shard file (it reads its index first), so a
         # damaged old shard would make the rewrite fail: remove it, the shard is not done
         (Path(path) / name / "c" / str(k) / "0" / "0").unlink(missing_ok=True)
-        _write_array(group[name], sel, data[name])
-    for name in layout.params:
-        _write_array(group["params"][name], sel, pdata[name])
+    writes = {**data, **{f"params/{n}": v for n, v in pdata.items()}}
+    _write_arrays({n: (members[n], v) for n, v in writes.items()}, sel)
     if particles is not None:
         write_particles(path, run_id, particles)
     done[k] = 1

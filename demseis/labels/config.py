@@ -60,6 +60,11 @@ class LabelConfig:
         strain of the smoothed element displacement on the grid), in (0, 100].
     ridge_sigma_cells : slip_trace: Gaussian sigma (cells) of the displacement smoothing
         before its shear strain is taken, in [0, 20].
+    strand_sigma_cells : slip_trace: Gaussian sigma (cells) of a second, finer crest search
+        for the other slip surfaces of a wide shear zone (a granular band of the DEM slips on
+        several particle boundaries side by side): crests of the displacement smoothed this
+        little, more than 2 cells from a trace, whose jump over 1-2 cells either side is at
+        least ``min_slip_m``, are traces too (strands); in [0, 20], 0 = none.
     slip_offset_cells : slip_trace: the jump is the largest of u(+k) - u(-k) along the normal
         for k = 2..this (cells), in [2, 20].
     min_trace_cells : slip_trace: crest / trace pieces with fewer cells are dropped, in [1, 1e6].
@@ -90,6 +95,7 @@ class LabelConfig:
     min_slip_m: float | None = None
     ridge_threshold: float = 0.15
     ridge_sigma_cells: float = 2.0
+    strand_sigma_cells: float = 0.7
     slip_offset_cells: int = 3
     min_trace_cells: int = 15
     link_angle_deg: float = 35.0
@@ -128,6 +134,7 @@ class LabelConfig:
             _number("min_slip_m", self.min_slip_m, 0.0, 1e4, lo_open=True)
         _number("ridge_threshold", self.ridge_threshold, 0.0, 100.0, lo_open=True)
         _number("ridge_sigma_cells", self.ridge_sigma_cells, 0.0, 20.0)
+        _number("strand_sigma_cells", self.strand_sigma_cells, 0.0, 20.0)
         _integer("slip_offset_cells", self.slip_offset_cells, 2, 20)
         _integer("min_trace_cells", self.min_trace_cells, 1, 1_000_000)
         _number("link_angle_deg", self.link_angle_deg, 0.0, 90.0)

@@ -19,6 +19,12 @@ method of :mod:`demseis.labels.maps`) turns such blobs into networks with loops 
    sides along the normal, k = 2..``slip_offset_cells``; the largest |u(+k) - u(-k)| is the
    displacement jump (slip, m), averaged along the trace over 5 x 5 cells. A crest cell is fault
    only where that slip is at least ``min_slip_m`` and its dip at least ``min_dip_deg``.
+2b. **Strands.** A DEM shear zone slips on several grain boundaries side by side; steps 1-2
+   are repeated on the displacement smoothed by only ``strand_sigma_cells``: crests of that
+   field more than STRAND_SEPARATION_CELLS from a trace, spanning STRAND_SPAN_CELLS or more,
+   whose jump over 1-2 cells is at least ``min_slip_m`` and persists 3-4 cells out, are traces
+   too (strands); the dip test is repeated on the union, and a strand within
+   STRAND_ZONE_CELLS of a trace takes its fault id.
 3. **Faults.** The kept cells are linked into traces: the skeleton is cut at its junctions, and
    at each junction the two branches that continue each other (directions within
    ``link_angle_deg`` of a straight line) are joined; the others (splays, antithetics, the
@@ -35,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
+from scipy.spatial import cKDTree
 
 from demseis.errors import InputError
 from demseis.labels import _kernels
@@ -52,6 +59,15 @@ DIRECTION_WINDOW = 9
 
 #: largest gap (cells) across which two facing trace ends are joined into one fault
 LINK_GAP_CELLS = 10.0
+
+#: strands (the finer crest search) closer than this (cells) to a trace are that trace's crest
+STRAND_SEPARATION_CELLS = 2.0
+
+#: strands (and their crest pieces) spanning fewer cells (bounding-box diagonal) are dropped
+STRAND_SPAN_CELLS = 11.0
+
+#: a strand lying mostly within this distance (cells) of a trace belongs to that fault's zone
+STRAND_ZONE_CELLS = 15.0
 
 
 @dataclass(frozen=True)
@@ -160,6 +176,7 @@ def shear_field(disp_x_m: np.ndarray, disp_y_m: np.ndarray, rock: np.ndarray, ce
         w = m.astype(np.float64)
         den = ndimage.gaussian_filter(w, sigma_cells, mode="nearest") if sigma_cells > 0 else w
         grads = []
+        shared = None  # nearest-cell indices of the cells outside the cohort (both components)
         for u in (disp_x_m, disp_y_m):
             uu = np.where(m, u, 0.0)
             num = ndimage.gaussian_filter(uu, sigma_cells, mode="nearest") if sigma_cells > 0 \
@@ -171,8 +188,10 @@ def shear_field(disp_x_m: np.ndarray, disp_y_m: np.ndarray, rock: np.ndarray, ce
             if bad.all():
                 sm = np.zeros_like(sm)
             elif bad.any():
-                idx = ndimage.distance_transform_edt(bad, return_distances=False,
-                                                     return_indices=True)
+                if shared is None or not np.array_equal(shared[0], bad):
+                    shared = (bad, ndimage.distance_transform_edt(
+                        bad, return_distances=False, return_indices=True))
+                idx = shared[1]
                 sm = sm[idx[0], idx[1]]
             d_row, d_col = np.gradient(sm)
             grads.append((d_col / cell_m, -d_row / cell_m))  # d/dx, d/dy (y up)
@@ -361,6 +380,15 @@ def trace_instances(skel: np.ndarray, link_angle_deg: float = 35.0,
     br_r, br_c = np.nonzero(blab)
     br_l = blab[br_r, br_c]
     reach = 8.0
+    tree = cKDTree(np.column_stack([br_r, br_c]).astype(np.float64))
+
+    def within(pr: float, pc: float) -> np.ndarray:
+        """Branch cells within ``reach`` of (pr, pc), in the order of np.nonzero."""
+        cand = np.array(sorted(tree.query_ball_point((pr, pc), reach + 1e-6)), dtype=np.int64)
+        if cand.size == 0:
+            return cand
+        return cand[(br_r[cand] - pr) ** 2 + (br_c[cand] - pc) ** 2 <= reach * reach]
+
     for z, sl in enumerate(ndimage.find_objects(zlab), start=1):
         if sl is None:
             continue
@@ -374,9 +402,10 @@ def trace_instances(skel: np.ndarray, link_angle_deg: float = 35.0,
         if adj.size < 2:
             continue
         dirs = {}
+        around = within(cr, cc)
         for b in adj:
-            sel = (br_l == b) & ((br_r - cr) ** 2 + (br_c - cc) ** 2 <= reach * reach)
-            if not sel.any():
+            sel = around[br_l[around] == b]
+            if not sel.size:
                 continue
             d = np.array([br_r[sel].mean() - cr, br_c[sel].mean() - cc])
             nrm = np.hypot(*d)
@@ -399,22 +428,24 @@ def trace_instances(skel: np.ndarray, link_angle_deg: float = 35.0,
         e_lab = blab[ends[:, 0], ends[:, 1]]
         e_dir = np.zeros((ends.shape[0], 2))
         for q, (r_, c_) in enumerate(ends):  # direction from the piece into the gap
-            sel = (br_l == e_lab[q]) & ((br_r - r_) ** 2 + (br_c - c_) ** 2 <= reach * reach)
+            sel = within(float(r_), float(c_))
+            sel = sel[br_l[sel] == e_lab[q]]
             d = np.array([r_ - br_r[sel].mean(), c_ - br_c[sel].mean()])
             nrm = np.hypot(*d)
             e_dir[q] = d / nrm if nrm > 0 else 0.0
         cos_gap = np.cos(np.radians(link_angle_deg))
-        for a in range(ends.shape[0]):
-            for b in range(a + 1, ends.shape[0]):
-                if e_lab[a] == e_lab[b]:
-                    continue
-                v = (ends[b] - ends[a]).astype(np.float64)
-                dist = np.hypot(*v)
-                if dist == 0 or dist > gap_cells:
-                    continue
-                v /= dist
-                if e_dir[a] @ v >= cos_gap and -(e_dir[b] @ v) >= cos_gap:
-                    parent[find(int(e_lab[a]))] = find(int(e_lab[b]))
+        # candidate pairs (a < b, lexicographic: the order fixes the union-find roots)
+        close = sorted(cKDTree(ends.astype(np.float64)).query_pairs(gap_cells + 1e-6))
+        for a, b in close:
+            if e_lab[a] == e_lab[b]:
+                continue
+            v = (ends[b] - ends[a]).astype(np.float64)
+            dist = np.hypot(*v)
+            if dist == 0 or dist > gap_cells:
+                continue
+            v /= dist
+            if e_dir[a] @ v >= cos_gap and -(e_dir[b] @ v) >= cos_gap:
+                parent[find(int(e_lab[a]))] = find(int(e_lab[b]))
     roots = np.array([find(i) for i in range(nb + 1)])
     lab = roots[blab]
     lab[~body] = 0
@@ -463,6 +494,7 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
             raise InputError(f"{name} has shape {np.shape(a)}; expected {shape} like strain")
     min_slip = cfg.min_slip_for(cell_m)
     # voids inside the assembly (an opened gap along a fault) are rock for the tracing
+    solid = rock
     rock = ndimage.binary_fill_holes(rock)
     if cohort is not None:
         cohort = np.asarray(cohort)
@@ -476,27 +508,55 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
         crest = project_on_local_line(crest, shift, int(cfg.centreline_window_cells)) & rock
         crest = remove_small_components(crest, cfg.min_trace_cells)
     crest_slip = np.full(shape, np.nan, dtype=np.float32)
-    empty = Traces(trace=np.zeros(shape, bool), instance=np.zeros(shape, np.int32),
-                   slip_m=np.zeros(shape, np.float32), dip_deg=np.zeros(shape, np.float32),
-                   sense=np.zeros(shape, np.uint8), crest=crest, crest_slip_m=crest_slip)
-    if not crest.any():
-        return empty
-    t_r, t_c = local_direction(crest)
-    jump = _jump(crest, t_r, t_c, disp_x_m, disp_y_m, rock, cfg.slip_offset_cells, cohort)
-    slip = _along_trace_mean(crest, np.nan_to_num(jump[..., 0], nan=0.0),
-                             np.isfinite(jump[..., 0]))
+    trace, slip = _slipping(crest, disp_x_m, disp_y_m, rock, cohort, 2, cfg.slip_offset_cells,
+                            min_slip, cfg)
     crest_slip[crest] = slip[crest]
-    trace = crest & (slip >= min_slip)
-    if cfg.min_dip_deg > 0:
-        trace &= dip_of(t_r, t_c) >= cfg.min_dip_deg
-    trace = remove_small_components(trace, cfg.min_trace_cells)
+    strand = np.zeros(shape, dtype=bool)
+    if cfg.strand_sigma_cells > 0 and trace.any():
+        # the other slip surfaces of a wide shear zone: crests of the finer field more than
+        # STRAND_SEPARATION_CELLS from a trace (the trace's own crest is there too)
+        fine = shear_field(disp_x_m, disp_y_m, rock, cell_m, cfg.strand_sigma_cells, cohort)
+        fcrest = crest_cells(fine, rock, cfg)
+        fcrest &= ndimage.distance_transform_edt(~trace) > STRAND_SEPARATION_CELLS
+        fcrest = _long_pieces(fcrest, STRAND_SPAN_CELLS)
+        f_dir = local_direction(fcrest)
+        strand, fslip = _slipping(fcrest, disp_x_m, disp_y_m, rock, cohort, 1, 2, min_slip, cfg,
+                                  f_dir)
+        # the two sides of a surface are blocks: the jump persists 3-4 cells out (around a
+        # grain that moved against all its neighbours it does not)
+        far, _ = _slipping(fcrest, disp_x_m, disp_y_m, rock, cohort, 3, 4, min_slip, cfg, f_dir)
+        strand &= far
+        strand = _long_pieces(strand, STRAND_SPAN_CELLS)
+        crest_slip[fcrest] = fslip[fcrest]
+        crest = crest | fcrest
+        slip = np.where(strand, fslip, slip)
+        trace = trace | strand
+        for _ in range(3 if cfg.min_dip_deg > 0 else 0):
+            # the direction of a strand next to a trace is the pair's: test the dip again, of
+            # what is labelled (trace_targets leaves out the voids)
+            shown = trace & solid
+            t_r, t_c = local_direction(shown)
+            flat = shown & (dip_of(t_r, t_c) < cfg.min_dip_deg)
+            if not flat.any():
+                break
+            trace &= ~flat
+        trace = remove_small_components(trace, cfg.min_trace_cells)
+        strand &= trace
     if not trace.any():
-        return empty
-    inst = trace_instances(trace, cfg.link_angle_deg, LINK_GAP_CELLS)
+        return Traces(trace=np.zeros(shape, bool), instance=np.zeros(shape, np.int32),
+                      slip_m=np.zeros(shape, np.float32), dip_deg=np.zeros(shape, np.float32),
+                      sense=np.zeros(shape, np.uint8), crest=crest, crest_slip_m=crest_slip)
+    inst = trace_instances(trace & ~strand, cfg.link_angle_deg, LINK_GAP_CELLS)
+    if strand.any():
+        inst = _strand_instances(inst, strand, cfg.link_angle_deg)
     t_r, t_c = local_direction(trace)
     dip = dip_of(t_r, t_c)
     # sense: jump (upper side minus lower side) against the down-dip direction
-    jump = _jump(trace, t_r, t_c, disp_x_m, disp_y_m, rock, cfg.slip_offset_cells, cohort)
+    jump = _jump(trace & ~strand, t_r, t_c, disp_x_m, disp_y_m, rock, cfg.slip_offset_cells,
+                 cohort)
+    if strand.any():
+        js = _jump(strand, t_r, t_c, disp_x_m, disp_y_m, rock, 2, cohort, k_min=1)
+        jump = np.where(strand[..., None], js, jump)
     down_r, down_c = np.abs(t_r), np.where(t_r >= 0, t_c, -t_c)
     along = jump[..., 1] * down_r + jump[..., 2] * down_c
     sense = np.where(along >= 0, SENSE_NORMAL, SENSE_REVERSE).astype(np.uint8)
@@ -508,10 +568,71 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
                   crest=crest, crest_slip_m=crest_slip)
 
 
+def _slipping(crest: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray, rock: np.ndarray,
+              cohort: np.ndarray | None, k_min: int, k_max: int, min_slip: float,
+              cfg: LabelConfig, direction: tuple[np.ndarray, np.ndarray] | None = None
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Crest cells that slip (step 2 of the module docstring) and the slip of every crest cell.
+
+    Returns (trace cells: slip >= ``min_slip``, dip >= ``min_dip_deg``, pieces of at least
+    ``min_trace_cells``; slip (m) along the crest, the jump for k = k_min..k_max averaged
+    along it over 5 x 5 cells, NaN off the crest or where not measurable).
+    """
+    if not crest.any():
+        return np.zeros(crest.shape, dtype=bool), np.full(crest.shape, np.nan)
+    t_r, t_c = local_direction(crest) if direction is None else direction
+    jump = _jump(crest, t_r, t_c, disp_x_m, disp_y_m, rock, k_max, cohort, k_min=k_min)
+    slip = _along_trace_mean(crest, np.nan_to_num(jump[..., 0], nan=0.0),
+                             np.isfinite(jump[..., 0]))
+    slip = np.where(crest, slip, np.nan)
+    trace = crest & (slip >= min_slip)
+    if cfg.min_dip_deg > 0:
+        trace &= dip_of(t_r, t_c) >= cfg.min_dip_deg
+    return remove_small_components(trace, cfg.min_trace_cells), slip
+
+
+def _long_pieces(cells: np.ndarray, min_cells: int) -> np.ndarray:
+    """The 8-connected pieces of ``cells`` whose bounding box has a diagonal of at least
+    ``min_cells`` cells (a strand is a surface, not the rim of one particle that moved
+    against all its neighbours)."""
+    lab, _ = ndimage.label(cells, structure=_EIGHT)
+    keep = np.zeros(int(lab.max()) + 1, dtype=bool)
+    for q, sl in enumerate(ndimage.find_objects(lab), start=1):
+        keep[q] = np.hypot(sl[0].stop - sl[0].start, sl[1].stop - sl[1].start) >= min_cells
+    keep[0] = False
+    return keep[lab]
+
+
+def _strand_instances(inst: np.ndarray, strand: np.ndarray, link_angle_deg: float) -> np.ndarray:
+    """Fault ids with the strands: a strand whose cells lie mostly within STRAND_ZONE_CELLS of
+    a trace is a surface of that fault's shear zone and takes its id (the commonest id of the
+    nearest trace cells); the others are faults of their own (ids by
+    :func:`trace_instances` among themselves). Renumbered 1.. by size."""
+    out = inst.copy()
+    own = trace_instances(strand, link_angle_deg, LINK_GAP_CELLS)
+    if inst.any():
+        dist, idx = ndimage.distance_transform_edt(inst == 0, return_indices=True)
+        nearest = inst[idx[0], idx[1]]
+    else:
+        dist, nearest = np.full(inst.shape, np.inf), np.zeros_like(inst)
+    lab, n = ndimage.label(strand, structure=_EIGHT)
+    offset = int(inst.max())
+    for q, sl in enumerate(ndimage.find_objects(lab), start=1):
+        cells = lab[sl] == q
+        d = dist[sl][cells]
+        if np.median(d) <= STRAND_ZONE_CELLS:
+            ids, counts = np.unique(nearest[sl][cells], return_counts=True)
+            out[sl][cells] = ids[np.argmax(counts)]
+        else:
+            out[sl][cells] = own[sl][cells] + offset
+    return _by_size(out)
+
+
 def _jump(cells: np.ndarray, t_r: np.ndarray, t_c: np.ndarray, disp_x_m: np.ndarray,
           disp_y_m: np.ndarray, rock: np.ndarray, k_max: int,
-          cohort: np.ndarray | None = None) -> np.ndarray:
-    """(nz, nx, 3) |jump|, jump row / col components at ``cells`` (NaN elsewhere).
+          cohort: np.ndarray | None = None, k_min: int = 2) -> np.ndarray:
+    """(nz, nx, 3) |jump|, jump row / col components at ``cells`` (NaN elsewhere), for the
+    offsets k = k_min..k_max cells along the normal.
 
     The normal points to the upper side (row decreasing; column increasing for a vertical
     trace), so the jump is u(upper side) - u(lower side).
@@ -527,7 +648,7 @@ def _jump(cells: np.ndarray, t_r: np.ndarray, t_c: np.ndarray, disp_x_m: np.ndar
     coh = np.zeros(cells.shape, np.int64) if cohort is None else cohort.astype(np.int64)
     _kernels.jump_across(u_row, u_col, np.ascontiguousarray(rock), np.ascontiguousarray(coh),
                          rows.astype(np.int64),
-                         cols.astype(np.int64), n_r, n_c, 2, max(int(k_max), 2), res)
+                         cols.astype(np.int64), n_r, n_c, int(k_min), max(int(k_max), int(k_min)), res)
     out = np.full((*cells.shape, 3), np.nan)
     out[rows, cols] = res
     return out

@@ -34,16 +34,16 @@ path, stop = sys.argv[1], sys.argv[2]
 real_write, real_particles = store._write_array, store.write_particles
 calls = []
 
-def announce_and_wait():
-    print("STOPPED", flush=True)
+def announce_and_wait(written=()):
+    print("STOPPED", *written, flush=True)
     while True:
         time.sleep(1)
 
-def write_array(arr, sel, data):
+async def write_array(arr, sel, data):
+    await real_write(arr, sel, data)
     calls.append(arr.path)
-    if stop == "mid-arrays" and len(calls) == 3:  # seismic and fault written, strain not
-        announce_and_wait()
-    real_write(arr, sel, data)
+    if stop == "mid-arrays" and len(calls) == 3:  # three of the shard's arrays are written
+        announce_and_wait(calls)  # blocks zarr's event loop: no other write of the shard ends
 
 def write_particles(*a, **k):
     real_particles(*a, **k)
@@ -82,8 +82,8 @@ def test_kill_9_mid_shard_then_resume(tmp_path, stop):
     path = make_store(tmp_path / "s.zarr", n_shards=4, s=S, shape=SHAPE, write=[0, 1])
     child = _spawn([str(path), stop], textwrap.dedent(CHILD.format(S=S, SHAPE=SHAPE)))
     try:
-        line = child.stdout.readline().strip()
-        assert line == "STOPPED", line
+        stopped, *written = child.stdout.readline().split()
+        assert stopped == "STOPPED", stopped
         os.kill(child.pid, signal.SIGKILL)
         assert child.wait(timeout=30) == -signal.SIGKILL
     finally:
@@ -93,7 +93,11 @@ def test_kill_9_mid_shard_then_resume(tmp_path, stop):
     # the killed shard got some (or all) of its data, but it is not done
     assert shard_status(path).tolist() == [1, 1, 0, 0]
     g = open_store(path, "r+")
-    assert np.isfinite(g["seismic"][2 * S:3 * S]).all()  # the child did write into shard 2
+    assert len(written) == (3 if stop == "mid-arrays" else 0)
+    data, params, _ = shard_data(2, S, SHAPE)
+    for name in written:  # the child did write these arrays of shard 2
+        want = params[name[len("params/"):]] if name.startswith("params/") else data[name]
+        np.testing.assert_array_equal(g[name][2 * S:3 * S], want)
     report = validate_store(path)
     assert report.ok and report.n_done == 2, report.problems
     _check_resumed(path, 4, S, SHAPE)

@@ -46,11 +46,11 @@ def test_injected_disk_full_then_resume(reference, tmp_path, monkeypatch, capsys
     real = store._write_array
     calls = []
 
-    def full(arr, sel, data):
+    async def full(arr, sel, data):
         calls.append(arr.path)
         if len(calls) == 3:
             raise OSError(errno.ENOSPC, "No space left on device")
-        real(arr, sel, data)
+        await real(arr, sel, data)
 
     monkeypatch.setattr(store, "_write_array", full)
     out = tmp_path / "full.zarr"

@@ -1,0 +1,57 @@
+"""The DEM coverage check (issue 13): jump field against a slow per-cell reference."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from demseis.labels.coverage import jump_coverage, jump_field
+from demseis.labels.maps import rasterise_strain
+from demseis.seismic.raster import rasterise
+from demseis.testing import disk_pack
+from demseis.types import Grid, Snapshot
+
+
+def _jump_reference(u, coh, reach):
+    nz, nx = coh.shape
+    out = np.zeros((nz, nx))
+    for i in range(nz):
+        for j in range(nx):
+            for dr in range(-reach, reach + 1):
+                for dc in range(-reach, reach + 1):
+                    ia, ja, ib, jb = i + dr, j + dc, i - dr, j - dc
+                    if not (0 <= ia < nz and 0 <= ja < nx and 0 <= ib < nz and 0 <= jb < nx):
+                        continue
+                    if coh[ia, ja] < 0 or coh[ia, ja] != coh[ib, jb]:
+                        continue
+                    d = u[ia, ja] - u[ib, jb]
+                    if np.all(np.isfinite(d)):
+                        out[i, j] = max(out[i, j], float(np.hypot(*d)))
+    return out
+
+
+def test_jump_field_matches_reference_and_sees_a_step():
+    xy, r = disk_pack(400.0, 200.0, np.random.default_rng(3))
+    n = xy.shape[0]
+    disp = np.zeros((n, 2))
+    disp[xy[:, 0] > 200.0, 1] = -30.0  # a vertical step of 30 m at x = 200 m
+    birth = (xy[:, 1] > 150.0).astype(np.int64)  # two cohorts: no jump across their boundary
+    disp[birth == 1, 1] += 5.0
+    snap = Snapshot(0, 0, 0.0, np.arange(n, dtype=np.int64), xy, r, np.zeros(n, np.int16),
+                    np.zeros(n, bool))
+    grid = Grid.covering(400.0, 200.0, 10.0)
+    jump, rock = jump_field(snap, disp, birth, grid)
+    u, _ = rasterise(xy, r, disp, grid)
+    _, owner = rasterise_strain(xy, r, np.zeros(n), grid)
+    coh = np.where(owner >= 0, birth[np.maximum(owner, 0)], -1)
+    np.testing.assert_allclose(jump, _jump_reference(u, coh, 2))
+    assert np.array_equal(rock, owner >= 0)
+    hi = jump >= 20.0
+    assert hi[:, 17:23].any(axis=1).mean() > 0.9  # the step is seen along its length
+    assert not hi[:, :14].any() and not hi[:, 26:].any()  # and nowhere else
+    line = np.zeros(grid.shape, dtype=bool)
+    line[:, 20] = True
+    n_hi, n_near = jump_coverage(line, jump, rock, 10.0)
+    cols = np.arange(grid.nx)[None, :]
+    assert n_hi == int((hi & rock).sum())
+    assert n_near == int((hi & rock & (np.abs(cols - 20) <= 2)).sum()) > 0.8 * n_hi
+    assert jump_coverage(np.zeros_like(line), jump, rock, 10.0) == (n_hi, 0)
