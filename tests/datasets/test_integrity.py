@@ -178,6 +178,27 @@ def test_dataset_checks_a_chunk_once_and_again_after_its_file_changes(tmp_path, 
         "shard 2: seismic is damaged in samples 15 (crc32c mismatch)"]
 
 
+def test_dataset_keeps_its_checks_when_a_shard_map_is_dropped(tmp_path, pristine, monkeypatch):
+    """A store of more shards than the reader keeps mapped is not checked again every epoch."""
+    import demseis.datasets._shardio as shardio
+
+    calls = []
+    real = shardio.crc_ok
+    monkeypatch.setattr(shardio, "crc_ok", lambda b: calls.append(b.shape[0]) or real(b))
+    monkeypatch.setattr(shardio, "MAX_OPEN_SHARDS", 1)
+    path = _copy(pristine, tmp_path / "s.zarr")
+    ds = FaultSegDataset(path, ("seismic",), ("fault",))
+    ds.__getitems__([0])
+    ds.__getitems__([S])  # shard 1: shard 0's maps are dropped
+    assert all(len(r._open) == 1 for r in ds._raw.values())
+    calls.clear()
+    ds.__getitems__([0])  # shard 0 mapped again: its index is read (and checked) again ...
+    assert len(calls) == 2  # ... but not its already checked chunks
+    calls.clear()
+    ds.__getitems__([S + 1])  # shard 1 mapped again (its index) and a new chunk of it
+    assert len(calls) == 4
+
+
 def test_dataset_zarr_path_names_the_damaged_samples(tmp_path, pristine, monkeypatch):
     """Arrays read through zarr (no raw fast path) also raise StoreError, not garbage."""
     import demseis.datasets.dataset as dataset
