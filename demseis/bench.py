@@ -21,9 +21,11 @@ random ``crop x crop`` windows through ``torch.utils.data.DataLoader``:
 - memmap (the limit): a minimal dataset cropping the same windows out of ``np.load(mmap_mode="r")``
   arrays in random order.
 
-Both use the same batch size, workers and collation; workers are persistent and one untimed
-epoch warms them (and the page cache) before ``repeats`` timed epochs, whose median is reported.
-Epochs of the two loaders alternate, so that the load of a shared machine hits both alike.
+Both use the same batch size, workers and collation; workers are persistent and a first epoch
+(reported apart, ``*_first_epoch_*``: worker start, page cache and, for the store, the first
+check of each chunk's crc32c in each worker) warms them before ``repeats`` timed epochs, whose
+median is reported. Epochs of the two loaders alternate, so that the load of a shared machine
+hits both alike.
 """
 
 from __future__ import annotations
@@ -364,17 +366,17 @@ def _epoch_rate(loader, n_items: int) -> float:
     return rate
 
 
-def _interleaved_rates(loaders: dict, n_items: int, repeats: int) -> dict[str, list[float]]:
+def _interleaved_rates(loaders: dict, n_items: int,
+                       repeats: int) -> tuple[dict[str, list[float]], dict[str, float]]:
     """Epoch rates of each loader, alternating loaders epoch by epoch so that changes in the
-    machine's load hit all of them alike; one untimed warm-up epoch each first."""
-    for loader in loaders.values():  # warm-up: worker start, page cache, first-touch pages
-        for _ in loader:
-            pass
+    machine's load hit all of them alike, after one first epoch each, timed apart (worker
+    start, page cache, first-touch pages and, for the store, each chunk's first checksum)."""
+    first = {name: _epoch_rate(loader, n_items) for name, loader in loaders.items()}
     rates: dict[str, list[float]] = {name: [] for name in loaders}
     for _ in range(repeats):
         for name, loader in loaders.items():
             rates[name].append(_epoch_rate(loader, n_items))
-    return rates
+    return rates, first
 
 
 def loader_benchmark(
@@ -439,7 +441,7 @@ def loader_benchmark(
             zl = DataLoader(ds, sampler=ShardAwareSampler(ds, seed=seed), **kw)
             ml = DataLoader(mm, sampler=RandomSampler(mm, generator=torch.Generator().manual_seed(seed)),
                             **kw)
-            rates = _interleaved_rates({"zarr": zl, "memmap": ml}, n, repeats)
+            rates, first = _interleaved_rates({"zarr": zl, "memmap": ml}, n, repeats)
             z_rates, m_rates = rates["zarr"], rates["memmap"]
             del zl, ml
             z_med, m_med = statistics.median(z_rates), statistics.median(m_rates)
@@ -448,6 +450,8 @@ def loader_benchmark(
             result[f"zarr_over_memmap_w{nw}"] = round(z_med / m_med, 3)
             result[f"zarr_runs_w{nw}"] = [round(r, 1) for r in z_rates]
             result[f"memmap_runs_w{nw}"] = [round(r, 1) for r in m_rates]
+            result[f"zarr_first_epoch_samples_per_s_w{nw}"] = round(first["zarr"], 1)
+            result[f"memmap_first_epoch_samples_per_s_w{nw}"] = round(first["memmap"], 1)
             if progress:
                 import sys
 

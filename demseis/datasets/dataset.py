@@ -428,9 +428,7 @@ class FaultSegDataset:
             raw = self._raw.get(name)
             if raw is None:
                 continue
-            for m, g in enumerate(globals_.tolist()):  # zero-copy crops of raw shards
-                rs, cs = windows[m]
-                out[name][m] = raw.window(g, rs, cs)
+            out[name] = raw.windows(globals_.tolist(), windows)  # crops of mapped shards
         zarr_names = [n for n in names if n not in self._raw]
         for shard in np.unique(shards).tolist() if zarr_names else []:
             members = np.nonzero(shards == shard)[0]

@@ -10,8 +10,10 @@ so it takes no writer lock and may run while a sweep writes (it checks the shard
 from __future__ import annotations
 
 import sys
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -101,6 +103,23 @@ def _fmt(values: np.ndarray, limit: int = 8) -> str:
     return ", ".join(vals) + (f" ... (+{more})" if more > 0 else "")
 
 
+def _intact(group: Any, names: Iterable[str], label: str, k: int, sel: slice,
+            damage: list[str], problems: list[str]) -> Iterator[tuple[str, np.ndarray]]:
+    """``(name, values)`` of shard ``k`` of each array ``names`` of ``group`` whose checksums
+    passed (``damage`` has no line for ``label + name``); an array that still cannot be read is
+    appended to ``problems``."""
+    for name in names:
+        what = f"shard {k}: {label}{name}"
+        if any(f"{what} " in line for line in damage):
+            continue
+        try:
+            values = group[name][sel]
+        except Exception as exc:  # noqa: BLE001 - truncated file, undecodable chunk
+            problems.append(f"{what} is unreadable: {exc}")
+            continue
+        yield name, values
+
+
 def validate_store(path: str | Path, *, check_particles: bool = True,
                    progress: bool = False) -> ValidationReport:
     """Check a demseis store; return every problem found.
@@ -180,24 +199,11 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
         sel = layout.shard_slice(k)
         damage = shard_damage(path, k, group, layout)  # checksums: names every damaged sample
         problems.extend(damage)
-        for name in layout.arrays:
-            if any(f"shard {k}: {name} " in line for line in damage):
-                continue
-            try:
-                values = group[name][sel]
-            except Exception as exc:  # noqa: BLE001
-                problems.append(f"shard {k}: {name} is unreadable: {exc}")
-                continue
+        for name, values in _intact(group, layout.arrays, "", k, sel, damage, problems):
             problems.extend(_check_array(name, values, k, sel.start))
         pvals: dict[str, np.ndarray] = {}
-        for name, dtype in layout.params.items():
-            if any(f"shard {k}: parameter {name} " in line for line in damage):
-                continue
-            try:
-                v = pgroup[name][sel]
-            except Exception as exc:  # noqa: BLE001
-                problems.append(f"shard {k}: parameter {name} is unreadable: {exc}")
-                continue
+        for name, v in _intact(pgroup, layout.params, "parameter ", k, sel, damage, problems):
+            dtype = layout.params[name]
             pvals[name] = v
             if dtype.kind == "f":
                 if np.isnan(v).any():

@@ -4,7 +4,9 @@ of an undamaged store."""
 
 from __future__ import annotations
 
+import os
 import shutil
+import time
 from pathlib import Path
 
 import numpy as np
@@ -130,6 +132,71 @@ def test_dataset_names_the_damaged_sample(tmp_path, pristine, case):
         ds.__getitems__([15])
     with pytest.raises(StoreError, match=r"sample.* 1[25]\b"):
         ds[15]
+
+
+def _replace_with_flipped(file: Path, offset: int) -> None:
+    """Damage ``file`` the way zarr writes: a new file renamed over it (new inode)."""
+    data = bytearray(file.read_bytes())
+    data[offset] ^= 0x10
+    tmp = file.with_name(file.name + ".tmp")
+    tmp.write_bytes(bytes(data))
+    os.replace(tmp, file)
+
+
+@pytest.mark.parametrize("how", ["written-in-place", "replaced"])
+def test_dataset_checks_a_chunk_once_and_again_after_its_file_changes(tmp_path, pristine,
+                                                                       monkeypatch, how):
+    """docs/store.md: a chunk's crc32c is checked on its first read by a reader, not again while
+    its shard file stays the same, and again once the file is written or replaced."""
+    import demseis.datasets._shardio as shardio
+
+    calls = []
+    real = shardio.crc_ok
+    monkeypatch.setattr(shardio, "crc_ok", lambda b: calls.append(b.shape[0]) or real(b))
+    path = _copy(pristine, tmp_path / "s.zarr")
+    ds = FaultSegDataset(path, ("seismic",), ("fault",))
+    first = ds.__getitems__([15])[0][0].clone()
+    assert len(calls) == 4  # seismic and fault: shard index, then chunk
+    calls.clear()
+    again = ds.__getitems__([15, 14])[0][0]
+    assert (again == first).all()
+    assert len(calls) == 2  # sample 14's seismic and fault chunks only; 15 was checked
+    calls.clear()
+    ds.__getitems__([14])
+    assert calls == []  # both checked already, both files unchanged
+    f = path / "seismic" / "c" / "2" / "0" / "0"
+    off, n = _chunk_range(f, 3)
+    if how == "written-in-place":
+        time.sleep(0.05)  # past the file system's timestamp resolution since the copy
+        _flip(f, off + n // 2)
+    else:
+        _replace_with_flipped(f, off + n // 2)
+    with pytest.raises(StoreError, match=r"sample 15 of array 'seismic' is damaged"):
+        ds.__getitems__([15])
+    assert ds.__getitems__([14])  # its neighbours in the same file are checked afresh, intact
+    assert validate_store(path).problems == [
+        "shard 2: seismic is damaged in samples 15 (crc32c mismatch)"]
+
+
+def test_dataset_keeps_its_checks_when_a_shard_map_is_dropped(tmp_path, pristine, monkeypatch):
+    """A store of more shards than the reader keeps mapped is not checked again every epoch."""
+    import demseis.datasets._shardio as shardio
+
+    calls = []
+    real = shardio.crc_ok
+    monkeypatch.setattr(shardio, "crc_ok", lambda b: calls.append(b.shape[0]) or real(b))
+    monkeypatch.setattr(shardio, "MAX_OPEN_SHARDS", 1)
+    path = _copy(pristine, tmp_path / "s.zarr")
+    ds = FaultSegDataset(path, ("seismic",), ("fault",))
+    ds.__getitems__([0])
+    ds.__getitems__([S])  # shard 1: shard 0's maps are dropped
+    assert all(len(r._open) == 1 for r in ds._raw.values())
+    calls.clear()
+    ds.__getitems__([0])  # shard 0 mapped again: its index is read (and checked) again ...
+    assert len(calls) == 2  # ... but not its already checked chunks
+    calls.clear()
+    ds.__getitems__([S + 1])  # shard 1 mapped again (its index) and a new chunk of it
+    assert len(calls) == 4
 
 
 def test_dataset_zarr_path_names_the_damaged_samples(tmp_path, pristine, monkeypatch):
