@@ -9,7 +9,6 @@ import sys
 import time
 from pathlib import Path
 
-import zarr
 
 ROOT = Path(__file__).resolve().parents[2]
 INTERRUPTED = "demseis: interrupted; run the same command to resume"
@@ -23,10 +22,16 @@ def spawn(args: list[str], env: dict[str, str] | None = None) -> subprocess.Pope
 
 
 def done_shards(store: Path) -> int:
-    """Shards marked done so far (0 while the store does not exist yet)."""
+    """Shards marked done so far (0 while the store does not exist yet).
+
+    Counted from the flag files themselves (a done flag is the chunk file ``shard_done/c/<k>``;
+    a pending one has no file: zarr deletes a chunk written with the fill value 0), not through
+    zarr: a poll that goes through zarr in this process was seen to miss a whole 5 s sweep
+    under load, so the interrupt came after the end.
+    """
     try:
-        return int((zarr.open_array(str(store / "shard_done"), mode="r")[:] == 1).sum())
-    except Exception:
+        return sum(1 for f in (store / "shard_done" / "c").iterdir() if f.name.isdigit())
+    except FileNotFoundError:
         return 0
 
 
