@@ -108,14 +108,10 @@ def check_shard_file(path: str | Path, n_chunks: int) -> tuple[str | None, list[
     everything = list(range(n_chunks))
     if data is None:
         return "missing", [], everything
-    index_nbytes = n_chunks * 16
-    if data.shape[0] < index_nbytes + CRC_NBYTES:
-        return "truncated", everything, []
-    raw_index = data[-(index_nbytes + CRC_NBYTES):]
-    if not crc_ok(raw_index):
-        return "index crc32c mismatch", everything, []
-    index = np.frombuffer(bytes(raw_index[:-CRC_NBYTES]), dtype="<u8").reshape(n_chunks, 2)
-    end = data.shape[0] - index_nbytes - CRC_NBYTES
+    index = _shard_index(data, n_chunks)
+    if isinstance(index, str):
+        return index, everything, []
+    end = data.shape[0] - n_chunks * 16 - CRC_NBYTES
     damaged, empty = [], []
     for i, (off, nbytes) in enumerate(index.tolist()):
         if off == int(_EMPTY):
@@ -123,6 +119,18 @@ def check_shard_file(path: str | Path, n_chunks: int) -> tuple[str | None, list[
         elif off + nbytes > end or not crc_ok(data[off: off + nbytes]):
             damaged.append(i)
     return None, damaged, empty
+
+
+def _shard_index(data: np.ndarray, n_chunks: int) -> np.ndarray | str:
+    """The (n_chunks, 2) ``(offset, nbytes)`` index at the end of shard file bytes ``data``, or
+    why it cannot be trusted: ``"truncated"`` or ``"index crc32c mismatch"``."""
+    index_nbytes = n_chunks * 16
+    if data.shape[0] < index_nbytes + CRC_NBYTES:
+        return "truncated"
+    raw_index = data[-(index_nbytes + CRC_NBYTES):]
+    if not crc_ok(raw_index):
+        return "index crc32c mismatch"
+    return np.frombuffer(bytes(raw_index[:-CRC_NBYTES]), dtype="<u8").reshape(n_chunks, 2)
 
 
 def raw_shard_layout(array) -> tuple[int, tuple[int, int], np.dtype, str | None] | None:
@@ -243,12 +251,10 @@ class RawShardReader:
             raise self._damaged(shard, "is missing")
         mm, st = mapped
         index_nbytes = self.s * 16
-        if mm.shape[0] < index_nbytes + CRC_NBYTES:
-            raise self._damaged(shard, "is truncated")
-        raw_index = mm[-(index_nbytes + CRC_NBYTES):]
-        if not crc_ok(raw_index):
-            raise self._damaged(shard, "has a corrupt index (crc32c mismatch)")
-        index = np.frombuffer(bytes(raw_index[:-CRC_NBYTES]), dtype="<u8").reshape(self.s, 2)
+        index = _shard_index(mm, self.s)
+        if isinstance(index, str):
+            raise self._damaged(shard, {"truncated": "is truncated"}.get(
+                index, "has a corrupt index (crc32c mismatch)"))
         ok = index[:, 0] != _EMPTY
         if (self.compressor is None and (ok & (index[:, 1] != self.chunk_nbytes + CRC_NBYTES)).any()) or (
             ok & (index[:, 0] + index[:, 1] > mm.shape[0] - index_nbytes - CRC_NBYTES)

@@ -6,7 +6,8 @@ These functions verify those checksums straight from the files, without decoding
 costs one read of its bytes. ``validate`` reports what they find, a resumed sweep rewrites the
 damaged shards (:func:`demseis.datasets.shard_status` with ``verify=True``), and the readers
 (:class:`~demseis.datasets.FaultSegDataset`, :func:`~demseis.datasets.read_sample`) check the
-same checksums on every chunk they read.
+same checksums on the chunks they read (the loader once per chunk and reader, again when the
+shard file changes: :class:`~demseis.datasets._shardio.RawShardReader`).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from demseis.datasets._shardio import CRC_NBYTES, check_chunk_file, check_shard_file, crc_ok
-from demseis.datasets.store import PARTICLE_FIELDS, open_store, store_layout
+from demseis.datasets.store import PARTICLE_FIELDS, _particle_group_name, open_store, store_layout
 
 
 def read_done_flags(path: str | Path, n_shards: int, array=None) -> tuple[np.ndarray, list[int]]:
@@ -104,7 +105,7 @@ def shard_damage(path: str | Path, k: int, group=None, layout=None) -> list[str]
         elif name == "run_id":
             ids = np.unique(group["params"]["run_id"][s0: s0 + s])
             run_id = int(ids[0]) if ids.size == 1 else k
-    run_dir = path / "particles" / f"run_{run_id:05d}"
+    run_dir = path / _particle_group_name(run_id)
     if (run_dir / "zarr.json").is_file():
         for name in PARTICLE_FIELDS:
             f = run_dir / name / "c" / "0"

@@ -21,6 +21,7 @@ from demseis.datasets.integrity import read_done_flags, shard_damage
 from demseis.datasets.store import (
     LABEL_RANGES,
     SCHEMA_VERSION,
+    _particle_group_name,
     fill_value_for,
     open_store,
     read_particles,
@@ -223,7 +224,7 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
         if "snapshot" in pvals and (pvals["snapshot"] < 0).any():
             problems.append(f"shard {k}: parameter snapshot has negative values")
         if check_particles and not any("particles" in line for line in damage) and (
-                Path(path) / f"particles/run_{run_id:05d}" / "zarr.json").is_file():
+                Path(path) / _particle_group_name(run_id) / "zarr.json").is_file():
             try:
                 snaps = read_particles(path, run_id)
             except StoreError as exc:
