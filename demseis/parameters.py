@@ -23,6 +23,7 @@ This module imports only the standard library and :mod:`demseis.errors`; every s
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -51,6 +52,9 @@ class Param:
     unit : SI unit ("" for dimensionless).
     section : the config table that holds it (``sweep``, ``model``, ``grid``, ``output``).
     lo_open, hi_open : the bound itself is excluded.
+    stage_lo, stage_hi, stage_lo_open, stage_hi_open : the wider physical domain the consuming
+        stage accepts when it is called directly (analytic tests, derived per-layer materials);
+        None = the config range above. A config is held to ``lo``..``hi``.
     """
 
     name: str
@@ -65,6 +69,19 @@ class Param:
     section: str = "sweep"
     lo_open: bool = False
     hi_open: bool = False
+    stage_lo: float | None = None
+    stage_hi: float | None = None
+    stage_lo_open: bool = False
+    stage_hi_open: bool = False
+
+    def stage(self) -> Param:
+        """This parameter with the bounds its consuming stage accepts (itself if no wider ones)."""
+        if self.stage_lo is None and self.stage_hi is None:
+            return self
+        return dataclasses.replace(self, lo=self.stage_lo, hi=self.stage_hi,
+                                   lo_open=self.stage_lo_open, hi_open=self.stage_hi_open,
+                                   stage_lo=None, stage_hi=None, stage_lo_open=False,
+                                   stage_hi_open=False)
 
     def allowed(self) -> str:
         """Human description of the admissible values, e.g. ``a number in [10, 80]``."""
@@ -148,8 +165,11 @@ def _fmt(x: float) -> str:
 def _p(name: str, kind: type, level: str, default: Any, lo: float | None = None,
        hi: float | None = None, *, unit: str = "", doc: str = "", section: str = "sweep",
        choices: tuple[str, ...] | None = None, lo_open: bool = False,
-       hi_open: bool = False) -> Param:
-    return Param(name, kind, level, default, lo, hi, choices, doc, unit, section, lo_open, hi_open)
+       hi_open: bool = False, stage: tuple[float, float, bool, bool] | None = None) -> Param:
+    """A declaration; ``stage`` = (lo, hi, lo_open, hi_open) of the wider stage domain."""
+    st = stage if stage is not None else (None, None, False, False)
+    return Param(name, kind, level, default, lo, hi, choices, doc, unit, section, lo_open, hi_open,
+                 *st)
 
 
 _DECLARED: tuple[Param, ...] = (
@@ -199,22 +219,36 @@ _DECLARED: tuple[Param, ...] = (
     _p("layer_thickness_cv", float, "run", 0.0, 0.0, 0.9,
        doc="coefficient of variation of layer thicknesses (0 = equal thicknesses)"),
     # ---- per run: mechanics (demseis.dem.Material) ---------------------------------------
-    _p("density_kg_m3", float, "run", 2500.0, 500.0, 6000.0, unit="kg/m^3",
-       doc="element density; mass = density * pi r^2 (unit thickness)"),
-    _p("kn_n_m", float, "run", 1.0e10, 1.0e6, 1.0e13, unit="N/m",
-       doc="normal contact stiffness Kn (dt ~ Kn^-1/2: 4e10 doubles a run's cost, 1e13 ~30x)"),
-    _p("ks_ratio", float, "run", 0.5, 0.0, 2.0, lo_open=True, doc="shear stiffness Ks / Kn"),
-    _p("friction", float, "run", 0.4, 0.0, 2.0,
-       doc="contact friction coefficient mu (slider |Fs| <= C0 + mu Fn)"),
-    _p("cohesion_n", float, "run", 5.0e7, 0.0, 1.0e12, unit="N", doc="contact cohesion C0"),
-    _p("bond_strain", float, "run", 0.02, 1.0e-5, 1.0, hi_open=True,
-       doc="bond-breaking strain r0: a bond breaks when d - R > r0 R"),
+    # Config ranges: physical for sedimentary rock, affordable (a seed-scale run takes at most
+    # 2x the default's steps) and stable (benchmarks/ranges_sweep.py; docs/dem.md, "Stability
+    # over the declared ranges"). ``stage``: the wider domain the DEM accepts when called
+    # directly (analytic tests at zero gravity or damping, derived softer weak layers).
+    _p("density_kg_m3", float, "run", 2500.0, 2000.0, 3000.0, unit="kg/m^3",
+       stage=(500.0, 6000.0, False, False),
+       doc="element density; mass = density * pi r^2 (unit thickness); sedimentary rocks"),
+    _p("kn_n_m", float, "run", 1.0e10, 5.0e9, 3.0e10, unit="N/m", stage=(1.0e6, 1.0e13, False, False),
+       doc="normal contact stiffness Kn (dt ~ sqrt(density / Kn): 3e10 at density 2000 is 1.9x "
+           "the default's steps)"),
+    _p("ks_ratio", float, "run", 0.5, 0.2, 1.0, stage=(0.0, 2.0, True, False),
+       doc="shear stiffness Ks / Kn"),
+    _p("friction", float, "run", 0.4, 0.2, 0.8, stage=(0.0, 2.0, False, False),
+       doc="contact friction coefficient mu (slider |Fs| <= C0 + mu Fn): clay-rich shale 0.2 "
+           "to Byerlee's 0.6-0.85"),
+    _p("cohesion_n", float, "run", 5.0e7, 0.0, 2.0e9, unit="N", stage=(0.0, 1.0e12, False, False),
+       doc="contact cohesion C0 (5e7 ductile drape, 1.4e9 the brittle cover)"),
+    _p("bond_strain", float, "run", 0.005, 0.001, 0.005, stage=(1.0e-5, 1.0, False, True),
+       doc="bond-breaking strain r0 of the bonded and brittle models: a bond breaks when "
+           "d - R > r0 R (unused by the frictional model)"),
     _p("contact_model", str, "run", "frictional", choices=("frictional", "bonded", "brittle"),
        doc="frictional-cohesive (cohesion heals: ductile), bonded (tensile bonds), or brittle "
            "(bonds broken by tension or shear, cohesion lost with them: faults localise)"),
-    _p("damping_scale", float, "run", 3.0e8, 0.0, 1.0e13, unit="N s/m per s",
-       doc="global viscous damping eta = dt * damping_scale"),
-    _p("gravity_m_s2", float, "run", 9.81, 0.0, 100.0, unit="m/s^2", doc="gravity"),
+    _p("damping_scale", float, "run", 3.0e8, 1.0e8, 5.0e8, unit="N s/m per s",
+       stage=(0.0, 1.0e13, False, False),
+       doc="global viscous damping eta = dt * damping_scale (up to 5e8 the smallest element "
+           "sinks faster than the basement at every corner of the ranges and dip 80 deg; the "
+           "paper's 3e9 detaches the hanging wall)"),
+    _p("gravity_m_s2", float, "run", 9.81, 9.78, 9.83, unit="m/s^2",
+       stage=(0.0, 100.0, False, False), doc="gravity (Earth's, equator to pole)"),
     # ---- per run: rock properties (demseis.seismic.PropertyModel scalars) ---------------
     _p("gardner_a", float, "run", 310.0, 100.0, 1000.0,
        doc="Gardner coefficient: rho = a Vp^b (rho in kg/m^3, Vp in m/s)"),
@@ -354,7 +388,10 @@ def table_rows() -> list[tuple[str, str, str, str, str, str, str]]:
             text = _fmt(default)
         else:
             text = str(default)
-        rows.append((p.name, p.section, p.level, p.unit, p.range_text(), text, p.doc))
+        doc = p.doc
+        if p.stage() is not p:
+            doc += f" (the stage, called directly, accepts {p.stage().range_text()})"
+        rows.append((p.name, p.section, p.level, p.unit, p.range_text(), text, doc))
     return rows
 
 

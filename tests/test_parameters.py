@@ -139,10 +139,11 @@ def test_config_refuses_just_outside_at_load(name):
 
 
 @pytest.mark.parametrize("name", sorted(STAGE))
-def test_stage_refuses_what_the_config_refuses_below(name):
-    """Where a stage bound matches the declaration, the stage refuses just outside too
-    (the stages that accept a wider range, like the wavelet's any f > 0, are skipped)."""
-    p = PARAMS[name]
+def test_stage_refuses_just_outside_its_domain(name):
+    """The stage refuses just outside its declared domain: the config range, or the wider stage
+    domain where one is declared (the DEM's mechanics); stages that accept a superset of what
+    they declare, like the wavelet's any f > 0, are skipped."""
+    p = PARAMS[name].stage()
     if STAGE[name] in (_wavelet, _noise, _grid, _psf) or name == "throw_m":
         pytest.skip("this stage accepts a superset of the declared range")
     for bound in (p.lo, p.hi):
@@ -150,6 +151,26 @@ def test_stage_refuses_what_the_config_refuses_below(name):
             continue
         with pytest.raises((InputError, ConfigError)):
             STAGE[name](name, _outside(p, bound))
+
+
+@pytest.mark.parametrize("name", sorted(STAGE))
+def test_stage_domain_contains_the_config_range(name):
+    p, q = PARAMS[name], PARAMS[name].stage()
+    for bound in (p.lo, p.hi):
+        if bound is not None:
+            assert q.in_range(_inside(p, bound)), (name, bound, q.allowed())
+
+
+def test_a_sweep_over_every_declared_mechanics_range_is_accepted():
+    """Every mechanics parameter drawn over its whole declared range, with dip over its whole
+    range, passes the range and physics checks at load (the physics rules are checked at the
+    worst corner), at the default wall speed and radii."""
+    sweep = {name: {"dist": "uniform", "low": PARAMS[name].lo, "high": PARAMS[name].hi}
+             for name in list(MATERIAL_FIELDS.values()) + ["strength_contrast", "dip_deg"]
+             if PARAMS[name].kind is float}
+    sweep["contact_model"] = {"dist": "choice", "values": list(PARAMS["contact_model"].choices)}
+    cfg = parse_config({"sweep": sweep})
+    assert cfg.sweep.params["kn_n_m"].high == PARAMS["kn_n_m"].hi
 
 
 def test_dip_85_refused_at_load_with_the_range(tmp_path):

@@ -14,8 +14,9 @@ clay-rich shale. The stiffness contrast is what makes faults refract (steeper in
 strong layers: docs/dem.md, "Refraction"); cohesion alone does not.
 
 ``s = 1`` gives every layer the base material (uniform mechanics). Each value is clipped to
-its field's declared range (:mod:`demseis.parameters`), so a base material at the edge of its
-range still gives layers the DEM accepts.
+its field's stage domain (:meth:`demseis.parameters.Param.stage`, the range the DEM accepts), so
+a base material at the edge of its range still gives layers the DEM accepts; weak layers may be
+softer or weaker than a config's range (Kn / 4 of the lowest declared Kn).
 """
 
 from __future__ import annotations
@@ -57,8 +58,8 @@ def layer_materials(lithologies: Sequence[str], base: Material, contrast: float
 
 
 def _clip(name: str, value: float) -> float:
-    """``value`` clipped to the declared range of parameter ``name``."""
-    p = PARAMS[name]
+    """``value`` clipped to the stage domain of parameter ``name``."""
+    p = PARAMS[name].stage()
     return min(max(value, float(p.lo)), float(p.hi))
 
 

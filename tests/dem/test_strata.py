@@ -32,12 +32,19 @@ def test_mild_contrast_and_uniform():
     assert layer_materials(["sandstone", "shale"], base, 1.0) == [base, base]
 
 
-def test_layers_stay_inside_the_declared_ranges():
-    top = PARAMS["cohesion_n"].hi
-    base = dataclasses.replace(Material(), cohesion_n=0.99 * top, kn_n_m=PARAMS["kn_n_m"].lo)
+def test_layers_stay_inside_the_stage_domain():
+    """Layers are clipped to what the DEM accepts (the stage domain), not to the config range:
+    a weak layer of the lowest declared Kn is 4x softer than it."""
+    top = PARAMS["cohesion_n"].stage().hi
+    low_kn = PARAMS["kn_n_m"].stage().lo
+    base = dataclasses.replace(Material(), cohesion_n=0.99 * top, kn_n_m=low_kn)
     strong, weak = layer_materials(["sandstone", "shale"], base, 16.0)
-    assert strong.cohesion_n == top and weak.kn_n_m == PARAMS["kn_n_m"].lo
+    assert strong.cohesion_n == top and weak.kn_n_m == low_kn
     validate_material(strong)
+    validate_material(weak)
+    lowest = dataclasses.replace(Material(), kn_n_m=PARAMS["kn_n_m"].lo)
+    weak = layer_materials(["shale"], lowest, 16.0)[0]
+    assert weak.kn_n_m == pytest.approx(PARAMS["kn_n_m"].lo / 4)
     validate_material(weak)
 
 

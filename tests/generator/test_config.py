@@ -30,7 +30,7 @@ MALFORMED = [
     ("[sweep]\nnoise_kind = \"pink\"", "sweep.noise_kind"),
     ("[sweep]\nn_runs = 0", "sweep.n_runs"),
     ("[sweep]\nn_layers = 2.5", "sweep.n_layers"),
-    ("[sweep]\nfriction = { dist = \"truncnormal\", mean = 0.4, std = -1, low = 0.1, high = 0.6 }",
+    ("[sweep]\nfriction = { dist = \"truncnormal\", mean = 0.4, std = -1, low = 0.2, high = 0.6 }",
      "sweep.friction.std"),
     ("[model]\nwidth_m = \"wide\"", "model.width_m"),
     ("[model]\nn_snapshots = 1", "model.n_snapshots"),
