@@ -390,7 +390,7 @@ def table_rows() -> list[tuple[str, str, str, str, str, str, str]]:
             text = str(default)
         doc = p.doc
         if p.stage() is not p:
-            doc += f" (the stage, called directly, accepts {p.stage().range_text()})"
+            doc += f" (engine-level calls accept {p.stage().range_text()})"
         rows.append((p.name, p.section, p.level, p.unit, p.range_text(), text, doc))
     return rows
 
