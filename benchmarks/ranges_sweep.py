@@ -4,10 +4,15 @@ affordable, and which of those run stably at seed scale (one JSON line per draw,
 Usage::
 
     NUMBA_NUM_THREADS=1 python benchmarks/ranges_sweep.py [--runs 8] [--seed 0]
-        [--max-cost 2.0] [--timeout 600] [--max-draws 2000] [--ranges declared|candidate]
+        [--max-cost 2.0] [--timeout 600] [--max-draws 2000] [--ranges declared|stage]
+        [--corners]
 
-``--ranges candidate`` draws over :data:`CANDIDATE` instead, the narrower ranges proposed for
-the declarations (same rules).
+``--ranges stage`` draws over the wider domain the DEM accepts when called directly
+(:meth:`demseis.parameters.Param.stage`; the config ranges before they were narrowed) instead
+of the config ranges. ``--corners`` runs, instead of random draws, the two extreme corners of the
+ranges for each contact model: ``strong`` (lightest, stiffest, most frictional and cohesive,
+largest bond strain, least damped, strongest gravity: the most rigid cover) and ``weak`` (the
+opposite, with cohesion 0), both with the largest strength contrast.
 
 Each draw takes every mechanics parameter of :data:`demseis.parameters.PARAMS`
 (``density_kg_m3``, ``kn_n_m``, ``ks_ratio``, ``friction``, ``cohesion_n``, ``bond_strain``,
@@ -48,28 +53,39 @@ from demseis.parameters import MATERIAL_FIELDS, PARAMS  # noqa: E402
 MECHANICS = tuple(MATERIAL_FIELDS.values()) + ("strength_contrast",)
 W, H, N_LAYERS = 5000.0, 2770.0, 48
 
-#: ``--ranges candidate``: physical, affordable ranges proposed to replace the declared ones
-#: (rock densities; Kn up to 3e10, which with density 2000 keeps a run within 2x the
-#: default's steps; friction of rocks; cohesion up to the 2e9 N of the stable brittle sweep;
-#: bond strain up to 0.005, BRITTLE's (with up to 0.02 a bonded run with C0 1.9e9 N blew up,
-#: as a brittle C0 1e9 N, r0 0.02 run had: bonds stretched that far store too much energy);
-#: damping from a third to 3x the default (the paper's 3e9 is refused by the physics checks
-#: at low Kn: the hanging wall would detach); Earth's gravity)
-CANDIDATE = {"density_kg_m3": (2000.0, 3000.0), "kn_n_m": (5.0e9, 3.0e10),
-             "ks_ratio": (0.2, 1.0), "friction": (0.2, 0.8), "cohesion_n": (0.0, 2.0e9),
-             "bond_strain": (0.001, 0.005), "damping_scale": (1.0e8, 1.0e9),
-             "gravity_m_s2": (9.78, 9.83), "strength_contrast": (1.0, 16.0)}
+def bounds(name: str, ranges: str) -> tuple[float, float]:
+    """(lo, hi) of parameter ``name``: its config range, or its stage domain."""
+    p = PARAMS[name].stage() if ranges == "stage" else PARAMS[name]
+    return float(p.lo), float(p.hi)
 
 
-def draw(rng: np.random.Generator, ranges: dict | None = None) -> dict:
-    """One value per mechanics parameter over its declared range (or ``ranges[name]``)."""
+def corners(ranges: str = "declared") -> list[tuple[str, dict]]:
+    """The strong and weak corner of the ranges for each contact model (see the module doc)."""
+    strong_hi = {"kn_n_m", "ks_ratio", "friction", "cohesion_n", "bond_strain", "gravity_m_s2",
+                 "strength_contrast"}
+    out = []
+    for model in PARAMS["contact_model"].choices:
+        for corner in ("strong", "weak"):
+            values: dict = {"contact_model": model}
+            for name in MECHANICS:
+                if name == "contact_model":
+                    continue
+                lo, hi = bounds(name, ranges)
+                pick_hi = (name in strong_hi) == (corner == "strong")
+                values[name] = hi if pick_hi or name == "strength_contrast" else lo
+            out.append((f"{corner}-{model}", values))
+    return out
+
+
+def draw(rng: np.random.Generator, ranges: str = "declared") -> dict:
+    """One value per mechanics parameter over its config range (or its stage domain)."""
     out = {}
     for name in MECHANICS:
         p = PARAMS[name]
         if p.choices is not None:
             out[name] = str(rng.choice(p.choices))
             continue
-        lo, hi = (float(p.lo), float(p.hi)) if not ranges or name not in ranges else ranges[name]
+        lo, hi = bounds(name, ranges)
         if lo == 0.0 and hi / 1e6 > 0 and hi > 100:
             v = 0.0 if rng.random() < 0.1 else float(10 ** rng.uniform(math.log10(hi) - 6,
                                                                          math.log10(hi)))
@@ -77,9 +93,10 @@ def draw(rng: np.random.Generator, ranges: dict | None = None) -> dict:
             v = float(10 ** rng.uniform(math.log10(lo), math.log10(hi)))
         else:
             v = float(rng.uniform(lo, hi))
-        if p.lo_open and v <= lo:
+        q = p.stage() if ranges == "stage" else p
+        if q.lo_open and v <= lo:
             v = lo + 1e-9 * (hi - lo)
-        if p.hi_open and v >= hi:
+        if q.hi_open and v >= hi:
             v = hi - 1e-9 * (hi - lo)
         out[name] = v
     return out
@@ -132,8 +149,10 @@ def main(argv=None) -> int:
     ap.add_argument("--max-cost", type=float, default=2.0)
     ap.add_argument("--timeout", type=float, default=600.0)
     ap.add_argument("--max-draws", type=int, default=2000)
-    ap.add_argument("--ranges", choices=("declared", "candidate"), default="declared",
-                    help="draw over the declared ranges or the CANDIDATE ones")
+    ap.add_argument("--ranges", choices=("declared", "stage"), default="declared",
+                    help="draw over the config ranges or the wider stage domains")
+    ap.add_argument("--corners", action="store_true",
+                    help="run the strong and weak corner per contact model, not random draws")
     ap.add_argument("--one", default=None, help=argparse.SUPPRESS)  # child: JSON of one draw
     args = ap.parse_args(argv)
     if args.one is not None:
@@ -143,12 +162,13 @@ def main(argv=None) -> int:
     counts = {"refused": 0, "too_costly": 0, "stable": 0, "unstable": 0, "timeout": 0}
     reasons: dict[str, int] = {}
     ran = 0
-    for k in range(args.max_draws):
-        if ran >= args.runs:
+    fixed = corners(args.ranges) if args.corners else None
+    for k in range(len(fixed) if fixed else args.max_draws):
+        if not fixed and ran >= args.runs:
             break
-        values = draw(rng, CANDIDATE if args.ranges == "candidate" else None)
-        row = {"draw": k, **{n: (round(v, 6) if isinstance(v, float) else v)
-                             for n, v in values.items()}}
+        label, values = fixed[k] if fixed else (k, draw(rng, args.ranges))
+        row = {"draw": label, **{n: (round(v, 6) if isinstance(v, float) else v)
+                                 for n, v in values.items()}}
         why = check(values)
         if why is not None:
             counts["refused"] += 1
@@ -174,7 +194,7 @@ def main(argv=None) -> int:
         counts[res["status"]] += 1
         print(json.dumps({**row, **res, "wall_s": round(time.time() - t0, 1)}), flush=True)
     print(json.dumps({"benchmark": "ranges_sweep", "ranges": args.ranges, "seed": args.seed,
-                      "runs": ran,
+                      "corners": args.corners, "runs": ran,
                       **counts, "refusal_reasons": reasons}))
     return 0
 
