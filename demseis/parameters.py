@@ -242,11 +242,12 @@ _DECLARED: tuple[Param, ...] = (
     _p("contact_model", str, "run", "frictional", choices=("frictional", "bonded", "brittle"),
        doc="frictional-cohesive (cohesion heals: ductile), bonded (tensile bonds), or brittle "
            "(bonds broken by tension or shear, cohesion lost with them: faults localise)"),
-    _p("damping_scale", float, "run", 3.0e8, 1.0e8, 5.0e8, unit="N s/m per s",
+    _p("damping_scale", float, "run", 3.0e8, 3.0e8, 5.0e8, unit="N s/m per s",
        stage=(0.0, 1.0e13, False, False),
-       doc="global viscous damping eta = dt * damping_scale (up to 5e8 the smallest element "
-           "sinks faster than the basement at every corner of the ranges and dip 80 deg; the "
-           "paper's 3e9 detaches the hanging wall)"),
+       doc="global viscous damping eta = dt * damping_scale (1e8 let the strongest, most "
+           "cohesive corner of the ranges blow up; up to 5e8 the smallest element sinks faster "
+           "than the basement at every corner and dip 80 deg; the paper's 3e9 detaches the "
+           "hanging wall)"),
     _p("gravity_m_s2", float, "run", 9.81, 9.78, 9.83, unit="m/s^2",
        stage=(0.0, 100.0, False, False), doc="gravity (Earth's, equator to pole)"),
     # ---- per run: rock properties (demseis.seismic.PropertyModel scalars) ---------------

@@ -9,7 +9,7 @@ Symbols: ρ density, Kn normal stiffness, r_min / r_max radii, m = ρπr² (unit
 dt = 0.25 sqrt(m_min / Kn) (Eq. 5), η = dt · damping_scale, g gravity, v wall speed, δ dip.
 
 The declared ranges (:mod:`demseis.parameters`) already hold gravity at Earth's, friction at
->= 0.2 and damping at >= 1e8: every config has an overburden, shear strength (a frictionless,
+>= 0.2 and damping at >= 3e8: every config has an overburden, shear strength (a frictionless,
 cohesionless pack flows like a fluid instead of faulting) and dissipation. The rules left
 combine the mechanics with the model's wall speed and the fault's dip and throw:
 

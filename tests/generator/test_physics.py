@@ -66,7 +66,7 @@ def test_wall_speed_bound_is_the_p_wave_fraction():
     r = 17.0
     assert c == pytest.approx(2 * r * math.sqrt(1e10 / (2500 * math.pi * r * r)))
     v_max = MAX_WALL_MACH * c
-    damp = {"damping_scale": 1.0e8}  # so that the hanging wall can follow this fast a base
+    damp = {"dip_deg": 30.0}  # so that the hanging wall can follow this fast a base
     parse_config({"model": {"wall_speed_m_s": 0.99 * v_max}, "sweep": damp})
     with pytest.raises(ConfigError, match="quasi-static"):
         parse_config({"model": {"wall_speed_m_s": 1.01 * v_max}, "sweep": damp})
