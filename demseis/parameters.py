@@ -234,8 +234,10 @@ _DECLARED: tuple[Param, ...] = (
     _p("friction", float, "run", 0.4, 0.2, 0.8, stage=(0.0, 2.0, False, False),
        doc="contact friction coefficient mu (slider |Fs| <= C0 + mu Fn): clay-rich shale 0.2 "
            "to Byerlee's 0.6-0.85"),
-    _p("cohesion_n", float, "run", 5.0e7, 0.0, 2.0e9, unit="N", stage=(0.0, 1.0e12, False, False),
-       doc="contact cohesion C0 (5e7 ductile drape, 1.4e9 the brittle cover)"),
+    _p("cohesion_n", float, "run", 5.0e7, 0.0, 1.4e9, unit="N", stage=(0.0, 1.0e12, False, False),
+       doc="contact cohesion C0, from the ductile drape (5e7) to the calibrated brittle cover "
+           "(1.4e9; 2e9 breaks in near-vertical fissures, and a bonded cover at the strong "
+           "corner of the other ranges blew up)"),
     _p("bond_strain", float, "run", 0.005, 0.001, 0.005, stage=(1.0e-5, 1.0, False, True),
        doc="bond-breaking strain r0 of the bonded and brittle models: a bond breaks when "
            "d - R > r0 R (unused by the frictional model)"),
