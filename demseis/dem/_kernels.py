@@ -143,7 +143,7 @@ def build_neighbours(pos, radius, skin, nbr, n_nbr, shear, bond, new_nbr, new_n,
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_heal, dt, force):
     """Add the pair (normal + tangential) forces to ``force`` and update the pair history.
 
@@ -166,10 +166,25 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_he
     Returns
     -------
     int number of bonds broken in tension during this call.
+
+    Notes
+    -----
+    One (1, 4) ``cmat`` runs a copy of the loop compiled with the material constant, which
+    reads no ``cmat`` per pair (``min(x, x) == x``, so the forces are the same to the bit).
     """
+    if cmat.shape[0] > 1:
+        return _pair_forces_impl(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio,
+                                 c0_heal, dt, force, True)
+    return _pair_forces_impl(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio,
+                             c0_heal, dt, force, False)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _pair_forces_impl(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_heal, dt,
+                      force, layered):
+    """Body of :func:`pair_forces`; ``layered`` False reads only ``cmat[0]``, once."""
     n = pos.shape[0]
     nbroken = 0
-    layered = cmat.shape[0] > 1  # one row: every element has the same material
     for i in range(n):
         xi = pos[i, 0]
         yi = pos[i, 1]
@@ -188,10 +203,9 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_he
             rr = ri + radius[j]
             d2 = dx * dx + dy * dy
             b = bond[i, k]
-            cj = j if layered else 0
             if b != 0:
                 d = np.sqrt(d2)
-                r0 = min(r0i, cmat[cj, 3])
+                r0 = min(r0i, cmat[j, 3]) if layered else r0i
                 if d - rr > r0 * rr:
                     bond[i, k] = 0
                     b = 0
@@ -205,9 +219,14 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_he
                     bond[i, k] = 0
                     continue
                 d = np.sqrt(d2)
-            kn = min(kni, cmat[cj, 0])
-            mu = min(mui, cmat[cj, 1])
-            c0 = min(c0i, cmat[cj, 2])
+            if layered:
+                kn = min(kni, cmat[j, 0])
+                mu = min(mui, cmat[j, 1])
+                c0 = min(c0i, cmat[j, 2])
+            else:
+                kn = kni
+                mu = mui
+                c0 = c0i
             ks = ks_ratio * kn
             inv_d = 1.0 / d
             nx = dx * inv_d
