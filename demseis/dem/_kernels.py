@@ -170,20 +170,22 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_he
     Notes
     -----
     One (1, 4) ``cmat`` runs a loop on that row's scalars, which reads no ``cmat`` per pair
-    (``min(x, x) == x``: the forces are the same to the bit).
+    (``min(x, x) == x``: the forces are the same to the bit); ``c0_heal == 1`` runs a loop
+    without the healed-cohesion select (see ``_make_pair_forces``).
     """
+    a = (pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_heal, dt, force)
     if cmat.shape[0] > 1:
-        return _pair_forces_layered(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio,
-                                    c0_heal, dt, force)
-    return _pair_forces_uniform(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio,
-                                c0_heal, dt, force)
+        return _pair_forces_layered_healed(*a) if c0_heal == 1.0 else _pair_forces_layered(*a)
+    return _pair_forces_healed(*a) if c0_heal == 1.0 else _pair_forces_uniform(*a)
 
 
-def _make_pair_forces(layered: bool):
-    """The loop of :func:`pair_forces`, compiled with ``layered`` a constant.
+def _make_pair_forces(layered: bool, healed: bool = False):
+    """The loop of :func:`pair_forces`, compiled with ``layered`` and ``healed`` constants.
 
     ``layered`` False reads ``cmat[0]`` once, not per pair: the closure constant lets Numba and
     LLVM drop the per-pair minima (a runtime flag cost about 10% of the DEM's time).
+    ``healed`` True is for ``c0_heal == 1`` (every contact cohesive): the cap starts at C0
+    without the select (``c0 * 1.0 == c0``: same bits; another 2-4%).
     """
 
     @njit(cache=True, error_model="numpy")
@@ -245,7 +247,7 @@ def _make_pair_forces(layered: bool):
                 vt = (vel[j, 0] - vel[i, 0]) * (-ny) + (vel[j, 1] - vel[i, 1]) * nx
                 xs = shear[i, k] + vt * dt
                 fs = -ks * xs
-                cap = c0 if b != 0 else c0 * c0_heal
+                cap = c0 if (healed or b != 0) else c0 * c0_heal
                 if fn > 0.0:
                     cap += mu * fn
                 if b == 2 and (fs > cap or fs < -cap):
@@ -276,6 +278,8 @@ def _make_pair_forces(layered: bool):
 
 _pair_forces_uniform = _make_pair_forces(False)
 _pair_forces_layered = _make_pair_forces(True)
+_pair_forces_healed = _make_pair_forces(False, True)
+_pair_forces_layered_healed = _make_pair_forces(True, True)
 
 
 @njit(cache=True, inline="always")
