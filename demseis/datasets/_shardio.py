@@ -26,6 +26,7 @@ any other codec chain are read through zarr. The result is identical to zarr's (
 
 from __future__ import annotations
 
+import contextlib
 import mmap
 import os
 import uuid
@@ -536,23 +537,26 @@ def put_file(path: Path, data: bytes | None) -> None:
 
     Readers see the old file, the new one or none, never a torn one. A process killed between
     the write and the rename leaves the temporary file (see :func:`temporary_name`); any other
-    error removes it and propagates.
+    error removes it and propagates (an ``OSError`` of the temporary file names ``path``).
     """
     if data is None:
         path.unlink(missing_ok=True)
         return
     tmp = temporary_name(path)
     try:
-        fh = open(tmp, "wb")
-    except FileNotFoundError:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fh = open(tmp, "wb")
-    try:
+        try:
+            fh = open(tmp, "wb")
+        except FileNotFoundError:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fh = open(tmp, "wb")
         with fh:
             fh.write(data)
         os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
+    except BaseException as exc:
+        with contextlib.suppress(OSError):  # e.g. no such directory: then no such file
+            tmp.unlink()
+        if isinstance(exc, OSError) and exc.filename in (tmp, str(tmp)):  # name the file meant
+            raise OSError(exc.errno, exc.strerror, str(path)) from exc
         raise
 
 

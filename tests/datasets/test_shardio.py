@@ -268,3 +268,23 @@ def test_temporary_files_of_a_killed_writer_are_removed(tmp_path):
     assert remove_partial_writes(out) == left
     write_shard(out, 1, *_shard(1), run_id=1)
     assert digest(out) == digest(ref)
+
+
+def test_put_file_errors_name_the_file_and_leave_no_temporary(tmp_path, monkeypatch):
+    import errno
+
+    import demseis.datasets._shardio as shardio
+
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(NotADirectoryError) as info:
+        shardio.put_file(tmp_path / "f" / "chunk", b"data")
+    assert info.value.filename == str(tmp_path / "f" / "chunk")
+
+    def full(src, dst):
+        raise OSError(errno.ENOSPC, "No space left on device", src)
+
+    monkeypatch.setattr(shardio.os, "replace", full)
+    with pytest.raises(OSError, match="No space") as info:
+        shardio.put_file(tmp_path / "d" / "chunk", b"data")
+    assert info.value.filename == str(tmp_path / "d" / "chunk")
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["d", "f"]  # no temporary file
