@@ -22,8 +22,8 @@ Who writes what
   (write-then-rename), so a task killed at any point leaves its shard not-done and a retry
   rewrites it from scratch. zarr creates every array (its metadata); the chunk and shard files
   of a shard are encoded and written by :mod:`demseis.datasets._shardio`, with zarr's codecs
-  and the bytes zarr would write, without zarr's asyncio machinery (0.15 s of a 0.25 s
-  kinematic run through zarr; see :func:`write_shard`).
+  and the bytes zarr would write, without zarr's asyncio machinery (through zarr, writing took
+  about 0.15 s of a 0.25 s kinematic run; see ``docs/store.md``).
 
 Missing data is detectable: float arrays are filled with NaN and integer arrays with a sentinel
 outside their valid range (255 for uint8 labels, the dtype minimum for signed integers), so a
