@@ -1082,8 +1082,9 @@ def record_failures(path: str | Path, failures: Mapping[int, str]) -> dict[str, 
     return out
 
 
-# zarr's LocalStore writes each file as ``<name>.<uuid4 hex>.partial`` and renames it into place;
-# a writer killed between the two leaves the temporary file behind
+# zarr's LocalStore and demseis's own writer (_shardio.put_file) write each file as
+# ``<name>.<uuid4 hex>.partial`` and rename it into place; a writer killed between the two
+# leaves the temporary file behind
 _PARTIAL_WRITE = re.compile(r"\.[0-9a-f]{32}\.partial$")
 
 
