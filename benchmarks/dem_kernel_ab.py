@@ -26,6 +26,7 @@ import importlib.util
 import inspect
 import json
 import os
+import shutil
 import statistics
 import sys
 import tempfile
@@ -105,7 +106,17 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     if "NUMBA_CACHE_DIR" not in os.environ:  # must be set before Numba is imported
         os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="demseis-kernel-ab-")
+        os.environ["_DEMSEIS_AB_SCRATCH"] = os.environ["NUMBA_CACHE_DIR"]
         os.execv(sys.executable, [sys.executable, *sys.argv])
+    try:
+        return _measure(a)
+    finally:
+        scratch = os.environ.get("_DEMSEIS_AB_SCRATCH")
+        if scratch and scratch == os.environ["NUMBA_CACHE_DIR"]:
+            shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _measure(a: argparse.Namespace) -> int:
     sys.path.insert(0, str(ROOT))
     state = capture(a.preset, a.config, a.run, a.call)
     checkouts = {"this": ROOT, **{f"other{i}": Path(p).resolve() for i, p in enumerate(a.other)}}
