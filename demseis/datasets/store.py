@@ -19,8 +19,11 @@ Who writes what
   shard (one shard file per sample array, one chunk per parameter array, its own particles
   group and its own done-flag chunk), so concurrent tasks on distinct shards cannot lose data.
   The done flag is cleared first and set last, and every file is written atomically
-  (write-then-rename by zarr's ``LocalStore``), so a task killed at any point leaves its shard
-  not-done and a retry rewrites it from scratch.
+  (write-then-rename), so a task killed at any point leaves its shard not-done and a retry
+  rewrites it from scratch. zarr creates every array (its metadata); the chunk and shard files
+  of a shard are encoded and written by :mod:`demseis.datasets._shardio`, with zarr's codecs
+  and the bytes zarr would write, without zarr's asyncio machinery (through zarr, writing took
+  about 0.15 s of a 0.25 s kinematic run; see ``docs/store.md``).
 
 Missing data is detectable: float arrays are filled with NaN and integer arrays with a sentinel
 outside their valid range (255 for uint8 labels, the dtype minimum for signed integers), so a
@@ -30,10 +33,11 @@ chunk that was never written reads as an invalid value and :func:`validate_store
 from __future__ import annotations
 
 import json
+import os
 import re
 import shutil
 import warnings
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -41,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from demseis import __version__
+from demseis.datasets._shardio import ArrayMeta, array_meta, put_file, write_block
 from demseis.types import Snapshot
 from demseis.errors import InputError, StoreError
 
@@ -342,6 +347,37 @@ def _array_members(group) -> dict:
     return out
 
 
+def _array_metas(path: Path) -> dict[str, ArrayMeta]:
+    """Every array of the store's root and of ``params`` (the arrays of :func:`_array_members`),
+    path -> :class:`~demseis.datasets._shardio.ArrayMeta`, read from their ``zarr.json`` files
+    directly (a few ms for a `quick` store; through zarr, 0.05 s of every shard write).
+
+    Raises
+    ------
+    StoreError
+        A ``zarr.json`` is unreadable, or an array uses codecs the direct writer does not
+        encode (not a store demseis created).
+    """
+    out: dict[str, ArrayMeta] = {}
+    for prefix in ("", "params/"):
+        base = path / prefix
+        try:
+            names = sorted(os.listdir(base))
+        except FileNotFoundError:
+            continue
+        for name in names:
+            meta_file = base / name / "zarr.json"
+            try:
+                meta = json.loads(meta_file.read_bytes())
+            except (FileNotFoundError, NotADirectoryError):
+                continue
+            except (OSError, ValueError) as exc:
+                raise StoreError(f"cannot read {str(meta_file)!r}: {exc}") from exc
+            if isinstance(meta, dict) and meta.get("node_type") == "array":
+                out[prefix + name] = array_meta(path, prefix + name, meta)
+    return out
+
+
 def store_layout(group) -> StoreLayout:
     """Derive the :class:`StoreLayout` of an open demseis store group.
 
@@ -354,7 +390,8 @@ def store_layout(group) -> StoreLayout:
 
 
 def _layout_of(members: Mapping[str, Any]) -> StoreLayout:
-    """:func:`store_layout` from the arrays :func:`_array_members` read."""
+    """:func:`store_layout` from the arrays :func:`_array_members` or :func:`_array_metas`
+    read (anything with ``shape``, ``dtype``, ``chunks`` and ``shards`` like a zarr array)."""
     if "shard_done" not in members:
         raise StoreError("store has no 'shard_done' array: it is incomplete or not a demseis store")
     n_shards = int(members["shard_done"].shape[0])
@@ -595,17 +632,10 @@ def create_store(
         "demseis": {"schema_version": SCHEMA_VERSION, "package_version": __version__},
         **attrs,
     }
-    group = zarr.create_group(path, zarr_format=3, attributes=root_attrs, overwrite=True)
     h, w = shape_t
     n = wanted.n_samples
     s = wanted.samples_per_shard
     row_dim, coords = _grid_coords(attrs.get("grid"), shape_t)
-    for name, values in coords.items():
-        units, long_name = COORDS[name]
-        group.create_array(name, shape=values.shape, dtype="float64", chunks=values.shape,
-                           fill_value=float("nan"), compressors=_small_compressors(),
-                           dimension_names=(name,),
-                           attributes={"units": units, "long_name": long_name})[...] = values
     specs: dict[str, dict[str, Any]] = {}  # array path -> create_array keywords
     for name, dtype in array_dtypes.items():
         spec = SAMPLE_ARRAY_SPECS[name]
@@ -619,7 +649,6 @@ def create_store(
             dimension_names=("sample", row_dim, "x"),
             attributes={"units": spec.units, "long_name": spec.long_name},
         )
-    group.create_group("params")
     for name, spec in param_specs.items():
         specs[f"params/{name}"] = dict(
             shape=(n,),
@@ -640,25 +669,52 @@ def create_store(
         attributes={"units": "1", "long_name": "1 once the shard (one DEM run) is complete",
                     "flag_values": [0, 1], "flag_meanings": "pending done"},
     )
-    _create_arrays(path, specs)
-    group.create_group("particles")
-    return group
+
+    def build(store) -> None:
+        group = zarr.create_group(store, zarr_format=3, attributes=root_attrs)
+        for name, values in coords.items():
+            units, long_name = COORDS[name]
+            group.create_array(name, shape=values.shape, dtype="float64", chunks=values.shape,
+                               fill_value=float("nan"), compressors=_small_compressors(),
+                               dimension_names=(name,),
+                               attributes={"units": units, "long_name": long_name})[...] = values
+        group.create_group("params")
+        _create_arrays(store, specs)
+        group.create_group("particles")
+
+    _put_files(path, _zarr_files(build))
+    return open_store(path, "r+")
 
 
-def _create_arrays(path: Path, specs: Mapping[str, Mapping[str, Any]]) -> None:
-    """Create the arrays ``path -> create_array keywords`` of the store at ``path``, all at once
-    on zarr's event loop (one at a time, the ~90 metadata writes took 0.4 s of every store's
-    creation)."""
+def _zarr_files(build: Callable[[Any], None]) -> dict[str, bytes]:
+    """The files (key -> bytes) zarr writes when ``build(store)`` creates groups and arrays in
+    the zarr store ``store``, an in-memory one: zarr makes every byte of the metadata, and
+    :func:`_put_files` writes them (through zarr's ``LocalStore``, its existence checks and
+    thread hops took 0.1-0.2 s of a `quick` store's creation, about half of it)."""
+    from zarr.storage import MemoryStore
+
+    files: dict[str, Any] = {}
+    build(MemoryStore(files))
+    return {key: buf.to_bytes() for key, buf in files.items()}
+
+
+def _put_files(path: Path, files: Mapping[str, bytes]) -> None:
+    """Write ``files`` (key -> bytes, keys relative to ``path``) each atomically, the top
+    ``zarr.json`` first (what zarr writes first: a store whose creation is cut short is still
+    recognised as a demseis store)."""
+    for key in sorted(files, key=lambda k: (k != "zarr.json", k)):
+        put_file(path.joinpath(*key.split("/")), files[key])
+
+
+def _create_arrays(store: Any, specs: Mapping[str, Mapping[str, Any]]) -> None:
+    """Create the arrays ``path -> create_array keywords`` in the zarr store ``store``, all at
+    once on zarr's event loop (one at a time, the ~90 metadata writes took 0.4 s of every
+    store's creation)."""
     import zarr
     from zarr.core.sync import sync
-    from zarr.storage import LocalStore
 
-    async def create_all() -> None:
-        store = await LocalStore.open(str(path))
-        await _gather_all(zarr.api.asynchronous.create_array(store, name=name, zarr_format=3, **kw)
-                          for name, kw in specs.items())
-
-    sync(create_all())
+    sync(_gather_all(zarr.api.asynchronous.create_array(store, name=name, zarr_format=3, **kw)
+                     for name, kw in specs.items()))
 
 
 def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.ndarray]]:
@@ -748,26 +804,23 @@ def _as_param_array(name: str, value: Any, dtype: np.dtype, n: int) -> np.ndarra
     return out
 
 
-async def _write_array(arr, sel: slice, data: np.ndarray) -> None:
-    """Write ``data`` into ``arr[sel]`` of the async array ``arr`` (one whole shard / chunk: one
-    atomic file)."""
-    await arr.setitem(sel, data)
+def _write_array(store: Path, arr: ArrayMeta, sel: slice, data: np.ndarray) -> None:
+    """Write ``data`` as ``arr[sel]`` of the store at ``store``: one whole shard of a sample
+    array or one whole chunk of a parameter, i.e. one file, written atomically with the bytes
+    zarr would write (:func:`demseis.datasets._shardio.write_block`).
 
-
-def _write_arrays(writes: Mapping[str, tuple[Any, np.ndarray]], sel: slice) -> None:
-    """Write ``data`` into ``array[sel]`` for every ``name -> (zarr.Array, data)`` of ``writes``,
-    all at once on zarr's event loop; returns when every write has ended and raises the first
-    error.
-
-    A shard touches about 90 arrays (most of them small parameter arrays); one by one, each
-    write waits in turn for its file write, which made ``write_shard`` take about 0.5 s on a
-    `quick` shard. Gathered, the waits overlap (with the metadata read once, by
-    :func:`_array_members`): about 0.15 s, measured with the shard writes of a `quick` store on
-    the development machine.
+    :func:`write_shard` writes every data array of a shard through this one function (tests
+    replace it to inject faults).
     """
-    from zarr.core.sync import sync
+    n = (arr.shards or arr.chunks)[0]
+    if sel.start % n or sel.stop - sel.start != n:
+        raise ValueError(f"{arr.path}: {sel} is not one whole chunk/shard of {n}")
+    write_block(store, arr, sel.start // n, data)
 
-    sync(_gather_all(_write_array(arr.async_array, sel, data) for arr, data in writes.values()))
+
+def _set_flag(store: Path, done: ArrayMeta, k: int, value: int) -> None:
+    """Set the done flag of shard ``k`` (0 deletes its chunk file: 0 is the fill value)."""
+    write_block(store, done, k, np.array([value], dtype=np.uint8))
 
 
 async def _gather_all(coros: Iterable[Any]) -> None:
@@ -815,23 +868,38 @@ def write_particles(path: str | Path, run_id: int, snapshots: Sequence[Snapshot]
         "step": np.array([sn.step for sn in snaps]),
         "throw_m": np.array([sn.throw_m for sn in snaps]),
     }
-    root = zarr.open_group(Path(path), mode="r+", use_consolidated=False)
-    group = root.create_group(_particle_group_name(run_id), overwrite=True,
-                              attributes={"run_id": int(run_id), "n_snapshots": len(snaps)})
-    for name, (dtype, dim, units, long_name) in PARTICLE_FIELDS.items():
-        values = data[name].astype(dtype, copy=False)
-        group.create_array(
-            name,
-            shape=values.shape,
+    path = Path(path)
+    name = _particle_group_name(run_id)
+    _check_store_metadata(path)  # a demseis store of this version
+    values = {k: data[k].astype(dtype, copy=False) for k, (dtype, *_) in PARTICLE_FIELDS.items()}
+    specs = {
+        k: dict(
+            shape=values[k].shape,
             dtype=dtype,
-            chunks=(max(1, values.shape[0]),),
+            chunks=(max(1, values[k].shape[0]),),
             fill_value=0,
             compressors=_small_compressors(),
             dimension_names=(dim,),
             attributes={"units": units, "long_name": long_name},
-            # write the chunk even when it is all zeros, so that a missing file means damage
-            config={"write_empty_chunks": True},
-        )[...] = values
+        )
+        for k, (dtype, dim, units, long_name) in PARTICLE_FIELDS.items()
+    }
+
+    def build(store) -> None:  # the group at the top of its own in-memory store
+        zarr.create_group(store, zarr_format=3,
+                          attributes={"run_id": int(run_id), "n_snapshots": len(snaps)})
+        _create_arrays(store, specs)
+
+    files = _zarr_files(build)
+    if (path / name).exists():  # the group is replaced, as by zarr's overwrite=True
+        shutil.rmtree(path / name)
+    _put_files(path / name, files)
+    for k in PARTICLE_FIELDS:
+        if values[k].shape[0]:  # an empty array has no chunk
+            meta = array_meta(path, f"{name}/{k}", json.loads(files[f"{k}/zarr.json"]))
+            # every chunk is written, also one of zeros (zarr's write_empty_chunks): a missing
+            # file means damage
+            write_block(path, meta, 0, values[k], write_empty=True)
 
 
 def read_particles(path: str | Path, run_id: int) -> list[Snapshot]:
@@ -917,7 +985,9 @@ def write_shard(
     StoreError
         The store is not a demseis store of this schema version.
     """
-    members = _array_members(open_store(path, "r+"))
+    path = Path(path)
+    _check_store_metadata(path)
+    members = _array_metas(path)
     layout = _layout_of(members)
     k = int(shard_index)
     if k != shard_index or not 0 <= k < layout.n_shards:
@@ -947,19 +1017,18 @@ def write_shard(
         run_id = k
 
     done = members["shard_done"]
-    # a rewrite must not leave a done flag over half-new data (writing the fill value deletes
-    # the chunk file without reading it, so a damaged flag is no obstacle)
-    done[k] = 0
+    # a rewrite must not leave a done flag over half-new data (the fill value 0 deletes the
+    # flag's file, so a damaged flag is no obstacle)
+    _set_flag(path, done, k, 0)
     sel = layout.shard_slice(k)
-    for name in layout.arrays:
-        # zarr merges a write into an existing shard file (it reads its index first), so a
-        # damaged old shard would make the rewrite fail: remove it, the shard is not done
-        (Path(path) / name / "c" / str(k) / "0" / "0").unlink(missing_ok=True)
+    # each file is encoded here and replaces the old one whole (write-then-rename): unlike a
+    # write through zarr, nothing reads the old shard file, so a damaged one is no obstacle
     writes = {**data, **{f"params/{n}": v for n, v in pdata.items()}}
-    _write_arrays({n: (members[n], v) for n, v in writes.items()}, sel)
+    for n, v in writes.items():
+        _write_array(path, members[n], sel, v)
     if particles is not None:
         write_particles(path, run_id, particles)
-    done[k] = 1
+    _set_flag(path, done, k, 1)
 
 
 # --------------------------------------------------------------------------------------------
@@ -1013,8 +1082,9 @@ def record_failures(path: str | Path, failures: Mapping[int, str]) -> dict[str, 
     return out
 
 
-# zarr's LocalStore writes each file as ``<name>.<uuid4 hex>.partial`` and renames it into place;
-# a writer killed between the two leaves the temporary file behind
+# zarr's LocalStore and demseis's own writer (_shardio.put_file) write each file as
+# ``<name>.<uuid4 hex>.partial`` and rename it into place; a writer killed between the two
+# leaves the temporary file behind
 _PARTIAL_WRITE = re.compile(r"\.[0-9a-f]{32}\.partial$")
 
 

@@ -143,7 +143,7 @@ def build_neighbours(pos, radius, skin, nbr, n_nbr, shear, bond, new_nbr, new_n,
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_heal, dt, force):
     """Add the pair (normal + tangential) forces to ``force`` and update the pair history.
 
@@ -166,83 +166,120 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_he
     Returns
     -------
     int number of bonds broken in tension during this call.
+
+    Notes
+    -----
+    One (1, 4) ``cmat`` runs a loop on that row's scalars, which reads no ``cmat`` per pair
+    (``min(x, x) == x``: the forces are the same to the bit); ``c0_heal == 1`` runs a loop
+    without the healed-cohesion select (see ``_make_pair_forces``).
     """
-    n = pos.shape[0]
-    nbroken = 0
-    layered = cmat.shape[0] > 1  # one row: every element has the same material
-    for i in range(n):
-        xi = pos[i, 0]
-        yi = pos[i, 1]
-        ri = radius[i]
-        ci = i if layered else 0
-        kni = cmat[ci, 0]
-        mui = cmat[ci, 1]
-        c0i = cmat[ci, 2]
-        r0i = cmat[ci, 3]
-        fxi = 0.0
-        fyi = 0.0
-        for k in range(n_nbr[i]):
-            j = nbr[i, k]
-            dx = pos[j, 0] - xi
-            dy = pos[j, 1] - yi
-            rr = ri + radius[j]
-            d2 = dx * dx + dy * dy
-            b = bond[i, k]
-            cj = j if layered else 0
-            if b != 0:
-                d = np.sqrt(d2)
-                r0 = min(r0i, cmat[cj, 3])
-                if d - rr > r0 * rr:
-                    bond[i, k] = 0
-                    b = 0
-                    nbroken += 1
-                    if d >= rr:
-                        shear[i, k] = 0.0
+    a = (pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_heal, dt, force)
+    if cmat.shape[0] > 1:
+        return _pair_forces_layered_healed(*a) if c0_heal == 1.0 else _pair_forces_layered(*a)
+    return _pair_forces_healed(*a) if c0_heal == 1.0 else _pair_forces_uniform(*a)
+
+
+def _make_pair_forces(layered: bool, healed: bool = False):
+    """The loop of :func:`pair_forces`, compiled with ``layered`` and ``healed`` constants.
+
+    ``layered`` False reads ``cmat[0]`` once, not per pair: the closure constant lets Numba and
+    LLVM drop the per-pair minima (a runtime flag cost about 10% of the DEM's time).
+    ``healed`` True is for ``c0_heal == 1`` (every contact cohesive): the cap starts at C0
+    without the select (``c0 * 1.0 == c0``: same bits; another 2-4%).
+    """
+
+    @njit(cache=True, error_model="numpy")
+    def kernel(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_heal, dt, force):
+        n = pos.shape[0]
+        nbroken = 0
+        kn0 = cmat[0, 0]
+        mu0 = cmat[0, 1]
+        c00 = cmat[0, 2]
+        r00 = cmat[0, 3]
+        ks0 = ks_ratio * kn0
+        for i in range(n):
+            xi = pos[i, 0]
+            yi = pos[i, 1]
+            ri = radius[i]
+            kni = cmat[i, 0] if layered else kn0
+            mui = cmat[i, 1] if layered else mu0
+            c0i = cmat[i, 2] if layered else c00
+            r0i = cmat[i, 3] if layered else r00
+            fxi = 0.0
+            fyi = 0.0
+            for k in range(n_nbr[i]):
+                j = nbr[i, k]
+                dx = pos[j, 0] - xi
+                dy = pos[j, 1] - yi
+                rr = ri + radius[j]
+                d2 = dx * dx + dy * dy
+                b = bond[i, k]
+                if b != 0:
+                    d = np.sqrt(d2)
+                    r0 = min(r0i, cmat[j, 3]) if layered else r0i
+                    if d - rr > r0 * rr:
+                        bond[i, k] = 0
+                        b = 0
+                        nbroken += 1
+                        if d >= rr:
+                            shear[i, k] = 0.0
+                            continue
+                else:
+                    if d2 >= rr * rr:
+                        shear[i, k] = 0.0  # (the flag is 0 already)
                         continue
-            else:
-                if d2 >= rr * rr:
-                    shear[i, k] = 0.0
-                    bond[i, k] = 0
-                    continue
-                d = np.sqrt(d2)
-            kn = min(kni, cmat[cj, 0])
-            mu = min(mui, cmat[cj, 1])
-            c0 = min(c0i, cmat[cj, 2])
-            ks = ks_ratio * kn
-            inv_d = 1.0 / d
-            nx = dx * inv_d
-            ny = dy * inv_d
-            fn = kn * (rr - d)
-            # tangent t = (-ny, nx); relative velocity of j w.r.t. i
-            vt = (vel[j, 0] - vel[i, 0]) * (-ny) + (vel[j, 1] - vel[i, 1]) * nx
-            xs = shear[i, k] + vt * dt
-            fs = -ks * xs
-            cap = c0 if b != 0 else c0 * c0_heal
-            if fn > 0.0:
-                cap += mu * fn
-            if b == 2 and (fs > cap or fs < -cap):
-                # a brittle bond that slips breaks for ever: cohesion and tension are lost
-                bond[i, k] = 0
-                cap = c0 * c0_heal
+                    d = np.sqrt(d2)
+                if layered:
+                    kn = min(kni, cmat[j, 0])
+                    mu = min(mui, cmat[j, 1])
+                    c0 = min(c0i, cmat[j, 2])
+                    ks = ks_ratio * kn
+                else:
+                    kn = kni
+                    mu = mui
+                    c0 = c0i
+                    ks = ks0
+                inv_d = 1.0 / d
+                nx = dx * inv_d
+                ny = dy * inv_d
+                fn = kn * (rr - d)
+                # tangent t = (-ny, nx); relative velocity of j w.r.t. i
+                vt = (vel[j, 0] - vel[i, 0]) * (-ny) + (vel[j, 1] - vel[i, 1]) * nx
+                xs = shear[i, k] + vt * dt
+                fs = -ks * xs
+                cap = c0 if (healed or b != 0) else c0 * c0_heal
                 if fn > 0.0:
                     cap += mu * fn
-            if fs > cap:
-                fs = cap
-                xs = -cap / ks
-            elif fs < -cap:
-                fs = -cap
-                xs = cap / ks
-            shear[i, k] = xs
-            fx = fn * nx - fs * ny
-            fy = fn * ny + fs * nx
-            force[j, 0] += fx
-            force[j, 1] += fy
-            fxi -= fx
-            fyi -= fy
-        force[i, 0] += fxi
-        force[i, 1] += fyi
-    return nbroken
+                if b == 2 and (fs > cap or fs < -cap):
+                    # a brittle bond that slips breaks for ever: cohesion and tension are lost
+                    bond[i, k] = 0
+                    cap = c0 * c0_heal
+                    if fn > 0.0:
+                        cap += mu * fn
+                if fs > cap:
+                    fs = cap
+                    xs = -cap / ks
+                elif fs < -cap:
+                    fs = -cap
+                    xs = cap / ks
+                shear[i, k] = xs
+                fx = fn * nx - fs * ny
+                fy = fn * ny + fs * nx
+                force[j, 0] += fx
+                force[j, 1] += fy
+                fxi -= fx
+                fyi -= fy
+            force[i, 0] += fxi
+            force[i, 1] += fyi
+        return nbroken
 
+    return kernel
+
+
+_pair_forces_uniform = _make_pair_forces(False)
+_pair_forces_layered = _make_pair_forces(True)
+_pair_forces_healed = _make_pair_forces(False, True)
+_pair_forces_layered_healed = _make_pair_forces(True, True)
 
 
 @njit(cache=True, inline="always")

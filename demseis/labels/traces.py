@@ -171,13 +171,19 @@ def shear_field(disp_x_m: np.ndarray, disp_y_m: np.ndarray, rock: np.ndarray, ce
     rock = np.asarray(rock, dtype=bool)
     coh = np.zeros(rock.shape, dtype=np.int64) if cohort is None else np.asarray(cohort)
     out = np.zeros(rock.shape)
+    # each cohort on its bounding box grown by the filter's radius + 2 (a sediment cohort is a
+    # thin band): the smoothed values there, and the gradients at the cohort's cells, are
+    # the same bits as on the whole grid (tests/labels/test_traces_box.py)
+    radius = int(4.0 * float(sigma_cells)) + 1 if sigma_cells > 0 else 0  # >= scipy's
     for c in np.unique(coh[rock]):
-        m = rock & (coh == c)
+        m_full = rock & (coh == c)
+        box_sl = _support(m_full, 2 * radius + 2)
+        m = m_full[box_sl]
         w = m.astype(np.float64)
         den = ndimage.gaussian_filter(w, sigma_cells, mode="nearest") if sigma_cells > 0 else w
         grads = []
         shared = None  # nearest-cell indices of the cells outside the cohort (both components)
-        for u in (disp_x_m, disp_y_m):
+        for u in (disp_x_m[box_sl], disp_y_m[box_sl]):
             uu = np.where(m, u, 0.0)
             num = ndimage.gaussian_filter(uu, sigma_cells, mode="nearest") if sigma_cells > 0 \
                 else uu
@@ -197,7 +203,7 @@ def shear_field(disp_x_m: np.ndarray, disp_y_m: np.ndarray, rock: np.ndarray, ce
             grads.append((d_col / cell_m, -d_row / cell_m))  # d/dx, d/dy (y up)
         (uxx, uxy), (uyx, uyy) = grads
         g = np.sqrt((uxx - uyy) ** 2 + (uxy + uyx) ** 2)
-        out[m] = g[m]
+        out[box_sl][m] = g[m]
     return out
 
 
@@ -240,10 +246,11 @@ def project_on_local_line(cells: np.ndarray, shift: np.ndarray, window: int) -> 
     c = np.asarray(cells, dtype=bool)
     if not c.any() or window <= 1:
         return c.copy()
-    w = c.astype(np.float64)
-    rr, cc = np.mgrid[0:c.shape[0], 0:c.shape[1]].astype(np.float64)
-    pr = rr + np.nan_to_num(shift[..., 0], nan=0.0)
-    pc = cc + np.nan_to_num(shift[..., 1], nan=0.0)
+    box_sl = _support(c, window)  # the filters on the mask's box: same bits (see _support)
+    w = c[box_sl].astype(np.float64)
+    rr, cc = np.mgrid[box_sl].astype(np.float64)
+    pr = rr + np.nan_to_num(shift[box_sl][..., 0], nan=0.0)
+    pc = cc + np.nan_to_num(shift[box_sl][..., 1], nan=0.0)
 
     def box(a: np.ndarray) -> np.ndarray:
         return ndimage.uniform_filter(a * w, size=window, mode="constant")
@@ -256,9 +263,10 @@ def project_on_local_line(cells: np.ndarray, shift: np.ndarray, window: int) -> 
     phi = 0.5 * np.arctan2(2.0 * crc, crr - ccc)
     t_r, t_c = np.cos(phi), np.sin(phi)
     rows, cols = np.nonzero(c)
-    a = (rows - mr[rows, cols]) * t_r[rows, cols] + (cols - mc[rows, cols]) * t_c[rows, cols]
-    qr = np.rint(mr[rows, cols] + a * t_r[rows, cols]).astype(np.int64)
-    qc = np.rint(mc[rows, cols] + a * t_c[rows, cols]).astype(np.int64)
+    br, bc = rows - box_sl[0].start, cols - box_sl[1].start
+    a = (rows - mr[br, bc]) * t_r[br, bc] + (cols - mc[br, bc]) * t_c[br, bc]
+    qr = np.rint(mr[br, bc] + a * t_r[br, bc]).astype(np.int64)
+    qc = np.rint(mc[br, bc] + a * t_c[br, bc]).astype(np.int64)
     ok = (qr >= 0) & (qr < c.shape[0]) & (qc >= 0) & (qc < c.shape[1])
     out = np.zeros_like(c)
     out[qr[ok], qc[ok]] = True
@@ -303,10 +311,17 @@ def local_direction(skel: np.ndarray, window: int = DIRECTION_WINDOW) -> tuple[n
     """Unit tangent (row, col) of a line mask, fitted over a ``window`` x ``window`` box.
 
     Principal axis of the coordinates of the mask cells in the box centred on each cell (the
-    box sums are box filters of the cell moments). Values off the mask are meaningless.
+    box sums are box filters of the cell moments). Values off the mask are meaningless (the
+    filters run on the mask's bounding box only, see :func:`_support`; (1, 0) outside it).
     """
-    s = np.asarray(skel, dtype=np.float64)
-    rr, cc = np.mgrid[0:s.shape[0], 0:s.shape[1]].astype(np.float64)
+    s_full = np.asarray(skel, dtype=np.float64)
+    t_r = np.ones(s_full.shape)
+    t_c = np.zeros(s_full.shape)
+    box_sl = _support(s_full != 0, window)
+    if box_sl is None:
+        return t_r, t_c
+    s = s_full[box_sl]
+    rr, cc = np.mgrid[box_sl].astype(np.float64)  # absolute coordinates, as on the whole grid
 
     def box(a: np.ndarray) -> np.ndarray:
         return ndimage.uniform_filter(a, size=window, mode="constant") * window * window
@@ -317,7 +332,29 @@ def local_direction(skel: np.ndarray, window: int = DIRECTION_WINDOW) -> tuple[n
     ccc = box(s * cc * cc) / n - mc * mc
     crc = box(s * rr * cc) / n - mr * mc
     phi = 0.5 * np.arctan2(2.0 * crc, crr - ccc)  # angle of the major axis from the row axis
-    return np.cos(phi), np.sin(phi)
+    t_r[box_sl] = np.cos(phi)
+    t_c[box_sl] = np.sin(phi)
+    return t_r, t_c
+
+
+def _support(mask: np.ndarray, size: int) -> tuple[slice, slice] | None:
+    """Bounding box of ``mask`` grown by ``size // 2 + 1`` cells (clipped to the grid); None
+    if the mask is empty.
+
+    A box filter (``ndimage.uniform_filter``, mode "constant" 0) of an array that is 0 off
+    the mask gives, inside this box, the same bits as on the whole grid: scipy runs a sum
+    along each line, and the box starts where the running sum is still exactly 0 (its window
+    holds only zeros) and ends after the last non-zero input, so every value inside sees the
+    same additions in the same order. (Only the values at mask cells are used: outside the
+    mask but inside the box they are the same too.)
+    """
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(mask.any(axis=0))
+    m = size // 2 + 1
+    return (slice(max(int(rows[0]) - m, 0), min(int(rows[-1]) + m + 1, mask.shape[0])),
+            slice(max(int(cols[0]) - m, 0), min(int(cols[-1]) + m + 1, mask.shape[1])))
 
 
 def dip_of(t_row: np.ndarray, t_col: np.ndarray) -> np.ndarray:
@@ -656,9 +693,16 @@ def _jump(cells: np.ndarray, t_r: np.ndarray, t_c: np.ndarray, disp_x_m: np.ndar
 
 def _along_trace_mean(cells: np.ndarray, values: np.ndarray, ok: np.ndarray,
                       size: int = 5) -> np.ndarray:
-    """Mean of ``values`` over the ``ok`` cells of ``cells`` in a size x size box (NaN if none)."""
-    w = (cells & ok).astype(np.float64)
-    num = ndimage.uniform_filter(values * w, size=size, mode="constant")
+    """Mean of ``values`` over the ``ok`` cells of ``cells`` in a size x size box (NaN if none;
+    the value at a cell of ``cells`` is exact, elsewhere it may be NaN: see :func:`_support`)."""
+    m = cells & ok
+    out = np.full(cells.shape, np.nan)
+    box_sl = _support(m, size)
+    if box_sl is None:
+        return out
+    w = m[box_sl].astype(np.float64)
+    num = ndimage.uniform_filter(values[box_sl] * w, size=size, mode="constant")
     den = ndimage.uniform_filter(w, size=size, mode="constant")
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(den > 1e-9, num / np.maximum(den, 1e-12), np.nan)
+        out[box_sl] = np.where(den > 1e-9, num / np.maximum(den, 1e-12), np.nan)
+    return out

@@ -141,6 +141,29 @@ def test_pair_forces_match_reference(c0, flag, heal, layered):
     assert sum(bond0.values()) > sum(bo_ref.values()) > 0
 
 
+@pytest.mark.parametrize("c0,flag,heal", [(2e7, 1, 1.0), (2e7, 2, 0.0)])
+def test_uniform_pair_forces_equal_tiled_to_the_bit(c0, flag, heal):
+    """One cmat row runs a loop compiled with the material constant: same bits as the row
+    given to every element (the per-pair min of two equal values is that value)."""
+    pos, vel, r, rng = _random_assembly(seed=3)
+    nbr, nn, sh, bo = _build(pos, r, 4.0)
+    n = len(r)
+    for i in range(n):
+        for k in range(nn[i]):
+            sh[i, k] = rng.normal(0, 0.05)
+            bo[i, k] = flag if rng.random() < 0.5 else 0
+    row = np.array([[1e10, 0.4, c0, 0.02]])
+    out = []
+    for cmat in (row, np.tile(row, (n, 1))):
+        f, s, b = np.zeros((n, 2)), sh.copy(), bo.copy()
+        nb = K.pair_forces(pos, vel, r, nbr, nn, s, b, cmat, 0.5, heal, 0.003, f)
+        out.append((f, s, b, nb))
+    (f1, s1, b1, n1), (f2, s2, b2, n2) = out
+    assert f1.tobytes() == f2.tobytes() and s1.tobytes() == s2.tobytes()
+    assert np.array_equal(b1, b2) and n1 == n2 > 0
+    assert not np.array_equal(b1, bo)  # bonds broke: the sample exercises the bond branch
+
+
 def _walls_case():
     """A random assembly with three walls (vertical, sloping, short) and random wall velocities."""
     pos, vel, r, rng = _random_assembly()

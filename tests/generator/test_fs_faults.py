@@ -46,11 +46,11 @@ def test_injected_disk_full_then_resume(reference, tmp_path, monkeypatch, capsys
     real = store._write_array
     calls = []
 
-    async def full(arr, sel, data):
+    def full(root, arr, sel, data):
         calls.append(arr.path)
         if len(calls) == 3:
             raise OSError(errno.ENOSPC, "No space left on device")
-        await real(arr, sel, data)
+        real(root, arr, sel, data)
 
     monkeypatch.setattr(store, "_write_array", full)
     out = tmp_path / "full.zarr"
