@@ -515,6 +515,23 @@ def _wait_spawned(n: int, timeout_s: float = 60.0) -> None:
         time.sleep(0.01)
 
 
+#: dask's periodic work turned down for a local sweep: a task is one long Numba call that holds
+#: the GIL, so the worker's stack sampler (every 10 ms), the event-loop tick (20 ms) and the
+#: system and nanny memory monitors (the nannies run in the driver) mostly wait for the GIL and
+#: take CPU from the tasks on a small machine. Measured on the 2-core development machine, 8
+#: `quick` runs: the driver's CPU time during a 2-worker sweep fell from 2.5-2.7 s to 1.5-1.9 s
+#: (tick and system monitor only, getrusage, two runs each); 2 workers against 1 with and without
+#: the settings alternating (`benchmarks/sweep.py --repeats 1`, three pairs) 1.73 / 1.89 / 1.81x
+#: against 1.56 / 1.86 / 1.56x, but a later `--repeats 3` gave 1.74x, within the machine's noise.
+#: The settings reach the spawned workers with the config.
+QUIET_DASK = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.worker.memory.monitor-interval": "1s",
+}
+
+
 def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: int) -> tuple[Any, Any]:
     """A LocalCluster of single-threaded worker processes and its client, the Numba cache warm.
 
@@ -547,7 +564,8 @@ def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: in
     cluster = client = None
     try:
         with dask.config.set({"distributed.worker.daemon": False,
-                              "distributed.scheduler.allowed-failures": retries + 1}):
+                              "distributed.scheduler.allowed-failures": retries + 1,
+                              **QUIET_DASK}):
             # No dashboard; the scheduler's small HTTP server (health routes) on any free port:
             # the default :8787 warns when another cluster holds it. Logs: CRITICAL only; task errors reach the
             # driver through the futures and end up in the summary, and a worker cut off by an
