@@ -209,11 +209,17 @@ def generate(config: Any = None, *, out: str | Path, workers: int | None = None,
         Failed runs are recorded in the store (``store.attrs["failures"]``); their samples are
         not done.
     """
-    from demseis.generator.sweep import run_sweep
-
     cfg = _resolve_config(config)
     if workers is not None and scheduler is not None:
         raise InputError("give either workers or scheduler, not both")
+    if scheduler is None and workers != 0:
+        from demseis.generator.workers import start_forkserver
+
+        # its preload (imports, Numba kernels) runs while this process imports the sweep,
+        # prepares the store and starts the scheduler (demseis.generator.workers)
+        start_forkserver()
+    from demseis.generator.sweep import run_sweep
+
     summary = run_sweep(cfg, out, workers=workers, scheduler=scheduler, overwrite=overwrite,
                         progress=progress)
     store = Store(out)

@@ -23,6 +23,7 @@ import numpy as np
 
 from demseis.errors import ConfigError, InputError, SimulationError, StoreError
 from demseis.generator.config import Config, parse_config
+from demseis.generator.workers import set_worker_env, start_forkserver, worker_start_method
 from demseis.generator.pipeline import (
     PARAM_CODES,
     array_dtypes,
@@ -57,7 +58,8 @@ class SweepSummary:
     #: wall seconds of the driver's phases: prepare (store), start (cluster + Numba warm-up,
     #: overlapped), compute, close (cluster shutdown), finalize (failures + consolidation)
     phase_seconds: dict[str, float] = field(default_factory=dict)
-    #: one record per finished task: shard, pid, start/end (epoch s), dem_s, render_s, write_s
+    #: one record per finished task: shard, pid, start/end (epoch s), dem_s, render_s, write_s,
+    #: cpu_s (CPU seconds of the task's thread)
     tasks: list[dict[str, Any]] = field(default_factory=list)
 
     @property
@@ -204,6 +206,7 @@ def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, An
 
     start = time.time()
     t0 = time.perf_counter()
+    c0 = time.thread_time()
     cfg = parse_config(cfg_dict)
     timings: dict[str, float] = {}
     try:
@@ -221,7 +224,8 @@ def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, An
     return {"shard": shard, "seconds": t3 - t0, "samples": int(data.arrays["seismic"].shape[0]),
             "no_fault": not bool(np.any(data.arrays["fault"][last])), "pid": os.getpid(),
             "start": start, "end": time.time(), "dem_s": timings.get("dem_s", 0.0),
-            "render_s": timings.get("render_s", 0.0), "write_s": t3 - t2}
+            "render_s": timings.get("render_s", 0.0), "write_s": t3 - t2,
+            "cpu_s": time.thread_time() - c0}
 
 
 def warm_numba_cache() -> None:
@@ -535,8 +539,10 @@ QUIET_DASK = {
 def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: int) -> tuple[Any, Any]:
     """A LocalCluster of single-threaded worker processes and its client, the Numba cache warm.
 
-    The cache is warmed in a thread while the worker processes start: tasks are submitted only
-    after both, so no worker compiles a kernel the driver is compiling.
+    With the forkserver (:func:`demseis.generator.workers.worker_start_method`), the server warms
+    the cache once before it forks any worker. With spawn, the cache is warmed in a thread of the driver while the worker
+    processes start: tasks are submitted only after both, so no worker compiles a kernel the
+    driver is compiling.
     """
     import threading
 
@@ -555,15 +561,24 @@ def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: in
         except BaseException as exc:  # re-raised in the driver below
             warm_errors.append(exc)
 
-    warmer = threading.Thread(target=warm, name="demseis-warm-numba")
-    warmer.start()
     n = workers or os.cpu_count() or 1
-    env = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-           "OPENBLAS_NUM_THREADS": "1"}
-    os.environ.update(env)  # inherited by the spawned worker processes
+    env = set_worker_env()
+    method = worker_start_method()
+    warmer = None
+    if method == "forkserver":
+        start_forkserver()  # a no-op when demseis.api.generate started it already
+        import distributed.utils
+
+        # dask's own forkserver preload list would import pandas and the like into the driver
+        if hasattr(distributed.utils, "_forkserver_preload_set"):
+            distributed.utils._forkserver_preload_set = True
+    else:
+        warmer = threading.Thread(target=warm, name="demseis-warm-numba")
+        warmer.start()
     cluster = client = None
     try:
         with dask.config.set({"distributed.worker.daemon": False,
+                              "distributed.worker.multiprocessing-method": method,
                               "distributed.scheduler.allowed-failures": retries + 1,
                               **QUIET_DASK}):
             # No dashboard; the scheduler's small HTTP server (health routes) on any free port:
@@ -576,22 +591,27 @@ def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: in
                                    silence_logs=logging.CRITICAL)
             client = Client(cluster)
             client.register_plugin(IgnoreSigint())  # workers started later (restarts) too
-            # The workers are spawned with SIGINT ignored, so they ignore it from their first
-            # import on; the driver ignores it only for the ~0.1 s the spawns take.
-            with _sigint_ignored():
+            if method == "forkserver":  # forked workers inherit the server's ignored SIGINT
                 cluster.scale(n)
-                _wait_spawned(n)
+            else:
+                # Spawned workers are started with SIGINT ignored, so they ignore it from their
+                # first import on; the driver ignores it only for the ~0.1 s the spawns take.
+                with _sigint_ignored():
+                    cluster.scale(n)
+                    _wait_spawned(n)
             # Tasks go out as soon as one worker is up (the others join as they start), and
             # a worker killed while starting does not make the sweep wait for it for ever.
             try:
                 client.wait_for_workers(1, timeout=120)
             except TimeoutError:
                 raise InputError("no dask worker started within 120 s") from None
-        warmer.join()
+        if warmer is not None:
+            warmer.join()
         if warm_errors:
             raise warm_errors[0]
     except BaseException:
-        warmer.join()
+        if warmer is not None:
+            warmer.join()
         if client is not None:
             client.close()
         if cluster is not None:

@@ -31,6 +31,30 @@ def _default_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
+def dask_workers(driver_pid: int) -> list:
+    """The sweep's dask worker processes below ``driver_pid`` (psutil processes).
+
+    Spawned workers run multiprocessing's ``spawn_main``; forked ones (the default start method,
+    see ``demseis.generator.sweep.worker_start_method``) are the children of the forkserver, a
+    child of the driver whose command line names ``multiprocessing.forkserver``.
+    """
+    import psutil
+
+    try:
+        below = psutil.Process(driver_pid).children(recursive=True)
+    except psutil.NoSuchProcess:  # the driver has ended
+        return []
+    found = []
+    for p in below:
+        try:
+            cmd = " ".join(p.cmdline())
+            if "spawn_main" in cmd or ("forkserver" in cmd and "forkserver" in " ".join(p.parent().cmdline())):
+                found.append(p)
+        except (psutil.NoSuchProcess, psutil.ZombieProcess, psutil.AccessDenied, AttributeError):
+            continue
+    return found
+
+
 def done_shards(store: Path) -> int:
     """Shards marked done so far (0 while the store does not exist yet).
 

@@ -15,7 +15,7 @@ import psutil
 import pytest
 
 from demseis.cli import main
-from tests.generator._faults import ROOT, spawn
+from tests.generator._faults import ROOT, dask_workers, spawn
 from tests.generator.test_generate import assert_same_bytes
 
 N_TRIALS = 20
@@ -23,16 +23,9 @@ N_TRIALS = 20
 
 def _kill_a_worker(proc: subprocess.Popen, delay_s: float) -> bool:
     """SIGKILL one worker process of the sweep ``delay_s`` after the first worker exists."""
-    driver = psutil.Process(proc.pid)
     t_first = None
     while proc.poll() is None:
-        workers = []
-        for p in driver.children(recursive=True):
-            try:
-                if "spawn_main" in " ".join(p.cmdline()):
-                    workers.append(p)
-            except (psutil.NoSuchProcess, psutil.ZombieProcess, psutil.AccessDenied):
-                continue
+        workers = dask_workers(proc.pid)
         if workers:
             t_first = t_first or time.time()
             if time.time() - t_first >= delay_s:

@@ -1,0 +1,83 @@
+"""How a local sweep starts its dask worker processes (light: imports nothing heavy).
+
+Where the platform has it (Linux, macOS), the workers are forked from multiprocessing's
+*forkserver*, a process that has first imported dask's worker machinery and demseis and loaded
+every Numba kernel (:mod:`demseis.generator._forkserver_preload`). A spawned worker instead
+imports all of it itself (~0.8 s of CPU) and loads the kernels in its first task (~0.7 s): on a
+machine with as many workers as cores that CPU is taken from the other workers' tasks. A forked
+worker also exits without the interpreter's shut-down of Numba and LLVM, so closing the cluster
+takes ~0.03 s instead of ~0.5 s.
+
+:func:`demseis.api.generate` starts the server before it imports the rest of the sweep, so that
+the server's preload (~1.5 s of CPU) runs on another core while the driver imports, prepares
+the store and starts the scheduler. Measured with ``python benchmarks/sweep.py --methods
+forkserver,spawn`` (README, "Measured performance").
+
+``DEMSEIS_WORKER_START=spawn`` (or ``forkserver``) forces a method.
+"""
+
+from __future__ import annotations
+
+import os
+
+#: thread counts of the worker processes: one task per worker, one thread per task
+WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+              "OPENBLAS_NUM_THREADS": "1"}
+
+METHODS = ("forkserver", "spawn")
+
+
+def worker_start_method() -> str:
+    """``forkserver`` where the platform has it, else ``spawn``; ``DEMSEIS_WORKER_START`` forces one.
+
+    Raises
+    ------
+    InputError
+        ``DEMSEIS_WORKER_START`` names another method, or one this platform lacks.
+    """
+    import multiprocessing
+
+    from demseis.errors import InputError
+
+    available = multiprocessing.get_all_start_methods()
+    forced = os.environ.get("DEMSEIS_WORKER_START", "").strip()
+    if forced:
+        if forced not in METHODS or forced not in available:
+            usable = [m for m in METHODS if m in available]
+            raise InputError(f"DEMSEIS_WORKER_START={forced!r}: use one of {usable}")
+        return forced
+    return "forkserver" if "forkserver" in available else "spawn"
+
+
+def set_worker_env() -> dict[str, str]:
+    """Put :data:`WORKER_ENV` into this process's environment (the workers and the forkserver
+    inherit it; Numba reads its thread count at import) and return it."""
+    os.environ.update(WORKER_ENV)
+    return dict(WORKER_ENV)
+
+
+def start_forkserver() -> None:
+    """Start the forkserver with the sweep's preload, unless it runs already; no-op with spawn.
+
+    It is started with SIGINT ignored, so that it and every worker it forks ignore Ctrl-C from
+    their first instruction (the driver handles it and shuts the cluster down). It serves every
+    later sweep of this process and exits with it; its preloaded modules are those of its start.
+    """
+    if worker_start_method() != "forkserver":
+        return
+    import multiprocessing
+    import multiprocessing.forkserver
+    import signal
+    import threading
+
+    set_worker_env()
+    multiprocessing.get_context("forkserver").set_forkserver_preload(
+        ["demseis.generator._forkserver_preload"])
+    if threading.current_thread() is not threading.main_thread():
+        multiprocessing.forkserver.ensure_running()
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        multiprocessing.forkserver.ensure_running()
+    finally:
+        signal.signal(signal.SIGINT, old)
