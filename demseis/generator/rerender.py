@@ -119,7 +119,7 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
     pending = [int(i) for i in np.flatnonzero(status != 1)]
     summary = SweepSummary(store=str(out), n_shards=len(status), samples_per_shard=cfg.samples_per_run,
                            done_before=len(status) - len(pending))
-    bar = _progress_bar(len(pending) * cfg.samples_per_run, progress, desc="render")
+    bar = _progress_bar(len(pending) * cfg.samples_per_run, progress and bool(pending), desc="render")
     try:
         for run in pending:
             if src_status[run] != 1:

@@ -353,7 +353,7 @@ def _run_sweep(
                            done_before=len(status) - len(pending))
     summary.phase_seconds["prepare"] = time.perf_counter() - t0
     cfg_dict = cfg.to_dict()
-    bar = _progress_bar(len(pending) * cfg.samples_per_run, progress)
+    bar = _progress_bar(len(pending) * cfg.samples_per_run, progress and bool(pending))
     try:
         if pending:
             if workers == 0 and scheduler is None:

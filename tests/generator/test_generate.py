@@ -63,6 +63,14 @@ def test_rerun_on_complete_store_is_a_no_op(tiny_store, capsys):
     assert _tree_bytes(tiny_store) == before
 
 
+def test_no_progress_bar_when_nothing_is_left(tiny_store, capsys):
+    """A rerun on a complete store prints its summary, not an empty progress bar (twice)."""
+    assert main(["generate", "--preset", "tiny", "--out", str(tiny_store), "--workers", "0"]) == 0
+    captured = capsys.readouterr()
+    assert "0 written now" in captured.out
+    assert "generate:" not in captured.err and "sample/s" not in captured.err
+
+
 def test_resume_removes_killed_writers_temporary_files(tiny_store, tmp_path):
     # zarr writes <file>.<uuid hex>.partial then renames it; kill -9 in between leaves it (the
     # kill test found one in a resumed store), and a half-made store beside it of a dead driver
