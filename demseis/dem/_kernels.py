@@ -179,6 +179,18 @@ def pair_forces(pos, vel, radius, nbr, n_nbr, shear, bond, cmat, ks_ratio, c0_he
     return _pair_forces_healed(*a) if c0_heal == 1.0 else _pair_forces_uniform(*a)
 
 
+@njit(cache=True, inline="always")
+def _slider(fs, xs, cap, ks):
+    """Coulomb slider of a contact: the shear force ``fs`` clamped to ``[-cap, cap]`` and the
+    shear displacement history ``xs``, reset at the cap to the elastic part ``-fs / ks``.
+    Returns ``(fs, xs)``."""
+    if fs > cap:
+        return cap, -cap / ks
+    if fs < -cap:
+        return -cap, cap / ks
+    return fs, xs
+
+
 def _make_pair_forces(layered: bool, healed: bool = False):
     """The loop of :func:`pair_forces`, compiled with ``layered`` and ``healed`` constants.
 
@@ -256,12 +268,7 @@ def _make_pair_forces(layered: bool, healed: bool = False):
                     cap = c0 * c0_heal
                     if fn > 0.0:
                         cap += mu * fn
-                if fs > cap:
-                    fs = cap
-                    xs = -cap / ks
-                elif fs < -cap:
-                    fs = -cap
-                    xs = cap / ks
+                fs, xs = _slider(fs, xs, cap, ks)
                 shear[i, k] = xs
                 fx = fn * nx - fs * ny
                 fy = fn * ny + fs * nx
@@ -315,13 +322,7 @@ def _wall_contact(i, w, ax, ay, ex, ey, l2, pos, vel, radius, wall_vel, wall_she
     vt = (vel[i, 0] - wall_vel[w, 0]) * (-ny) + (vel[i, 1] - wall_vel[w, 1]) * nx
     xs = wall_shear[i, w] + vt * dt
     fs = -ks * xs
-    cap = mu * fn
-    if fs > cap:
-        fs = cap
-        xs = -cap / ks
-    elif fs < -cap:
-        fs = -cap
-        xs = cap / ks
+    fs, xs = _slider(fs, xs, mu * fn, ks)
     wall_shear[i, w] = xs
     force[i, 0] += fn * nx - fs * ny
     force[i, 1] += fn * ny + fs * nx
