@@ -305,6 +305,17 @@ def _segment_offset(px, py, ex, ey, l2):
     return px - s * ex, py - s * ey
 
 @njit(cache=True, inline="always")
+def _wall_segment(walls, w):
+    """Wall ``w`` of ``walls`` (rows x0, y0, x1, y1) as its start (ax, ay), its vector
+    (ex, ey) and its squared length l2."""
+    ax = walls[w, 0]
+    ay = walls[w, 1]
+    ex = walls[w, 2] - ax
+    ey = walls[w, 3] - ay
+    return ax, ay, ex, ey, ex * ex + ey * ey
+
+
+@njit(cache=True, inline="always")
 def _wall_contact(i, w, ax, ay, ex, ey, l2, pos, vel, radius, wall_vel, wall_shear, kn, ks, mu,
                   dt, force):
     """Force of wall ``w`` (segment from (ax, ay) along (ex, ey), squared length l2) on element
@@ -348,11 +359,7 @@ def wall_forces(pos, vel, radius, walls, wall_vel, wall_shear, kn, ks, mu, dt, f
     n = pos.shape[0]
     nw = walls.shape[0]
     for w in range(nw):
-        ax = walls[w, 0]
-        ay = walls[w, 1]
-        ex = walls[w, 2] - ax
-        ey = walls[w, 3] - ay
-        l2 = ex * ex + ey * ey
+        ax, ay, ex, ey, l2 = _wall_segment(walls, w)
         for i in range(n):
             _wall_contact(i, w, ax, ay, ex, ey, l2, pos, vel, radius, wall_vel, wall_shear, kn, ks,
                           mu, dt, force)
@@ -366,11 +373,7 @@ def build_wall_candidates(pos, radius, walls, skin, cand, n_cand):
     """
     n = pos.shape[0]
     for w in range(walls.shape[0]):
-        ax = walls[w, 0]
-        ay = walls[w, 1]
-        ex = walls[w, 2] - ax
-        ey = walls[w, 3] - ay
-        l2 = ex * ex + ey * ey
+        ax, ay, ex, ey, l2 = _wall_segment(walls, w)
         m = 0
         for i in range(n):
             dx, dy = _segment_offset(pos[i, 0] - ax, pos[i, 1] - ay, ex, ey, l2)
@@ -390,11 +393,7 @@ def wall_forces_listed(pos, vel, radius, walls, wall_vel, wall_shear, kn, ks, mu
     their X_s with it is already 0 (reset when they left contact).
     """
     for w in range(walls.shape[0]):
-        ax = walls[w, 0]
-        ay = walls[w, 1]
-        ex = walls[w, 2] - ax
-        ey = walls[w, 3] - ay
-        l2 = ex * ex + ey * ey
+        ax, ay, ex, ey, l2 = _wall_segment(walls, w)
         for q in range(n_cand[w]):
             i = cand[w, q]
             _wall_contact(i, w, ax, ay, ex, ey, l2, pos, vel, radius, wall_vel, wall_shear, kn, ks,
