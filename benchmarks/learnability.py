@@ -11,6 +11,7 @@ Comparing label sets: make stores that differ only in their labels with ``demsei
 (same seismic bytes), then run this on each with the same ``--seed`` and budget.
 
     PYTHONPATH=$PWD python benchmarks/learnability.py STORE [--steps N] [--seed 0]
+        [--train-runs N]
 """
 
 from __future__ import annotations
@@ -37,6 +38,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-train-eval", type=int, default=96,
                     help="train samples scored (a fixed random subset)")
     ap.add_argument("--device", help="cuda / cpu (default: cuda when available)")
+    ap.add_argument("--train-runs", type=int,
+                    help="train on the first N train runs only, the held-out runs unchanged "
+                         "(a learning curve on one store: e.g. 64 against all 96 of 128 runs)")
     args = ap.parse_args(argv)
 
     import torch
@@ -49,10 +53,18 @@ def main(argv: list[str] | None = None) -> int:
     steps = args.steps or (3000 if cuda else 300)
     base = args.base or (32 if cuda else 16)
     fr = (1.0 - args.test_fraction, 0.0, args.test_fraction)
+    where = None
+    if args.train_runs is not None:
+        train_runs = np.unique(FaultSegDataset(args.store, inputs=("seismic",), targets=("fault",),
+                                               split="train", split_fractions=fr).run_ids)
+        if not 0 < args.train_runs <= train_runs.size:
+            raise SystemExit(f"--train-runs {args.train_runs}: the store has {train_runs.size} "
+                             "train runs")
+        where = {"run_id": [int(r) for r in train_runs[:args.train_runs]]}
     t0 = time.perf_counter()
     model, info = train_unet(args.store, steps=steps, crop=args.crop, batch=args.batch,
                              base=base, lr=args.lr, seed=args.seed, threads=args.threads,
-                             device=args.device, split_fractions=fr, log=None)
+                             device=args.device, split_fractions=fr, log=None, where=where)
     out: dict = {"benchmark": "learnability", "store": args.store, "steps": info["steps"],
                  "base": base, "crop": args.crop, "batch": args.batch, "seed": args.seed,
                  "device": info["device"], "train_seconds": info["seconds"],
@@ -61,9 +73,10 @@ def main(argv: list[str] | None = None) -> int:
         out["cpu"] = platform.processor() or platform.machine()
         out["threads"] = args.threads
     rng = np.random.default_rng(args.seed)
+    out["train_runs_used"] = None if where is None else len(where["run_id"])
     for split in ("train", "test"):
         ds = FaultSegDataset(args.store, inputs=("seismic",), targets=("fault",), split=split,
-                             split_fractions=fr)
+                             split_fractions=fr, where=where if split == "train" else None)
         idx = np.arange(len(ds))
         if split == "train" and len(ds) > args.max_train_eval:
             idx = np.sort(rng.choice(len(ds), args.max_train_eval, replace=False))

@@ -54,3 +54,21 @@ def test_learnability_benchmark_prints_one_json_line(tmp_path, capsys):
                 assert 0.0 <= out[f"{split}_{k}_tol{tol}"] <= 1.0 or np.isnan(
                     out[f"{split}_{k}_tol{tol}"])
     assert out["test_runs"] >= 1 and out["train_runs"] >= 1
+
+
+def test_learnability_benchmark_train_runs_subset_keeps_the_held_out_runs(tmp_path, capsys):
+    """--train-runs N trains and scores the first N train runs; the held-out runs stay the same."""
+    store = tmp_path / "tiny.zarr"
+    _tiny_store(store)
+    bench_main = runpy.run_path(str(BENCH))["main"]
+    common = [str(store), "--steps", "1", "--crop", "16", "--batch", "4", "--base", "4",
+              "--threads", "1", "--test-fraction", "0.4", "--device", "cpu"]
+    assert bench_main(common) == 0
+    full = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert full["train_runs"] >= 2, "the tiny store needs two train runs for this test"
+    assert bench_main(common + ["--train-runs", "1"]) == 0
+    sub = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert sub["train_runs_used"] == 1 and sub["train_runs"] == 1
+    assert sub["test_runs"] == full["test_runs"] and sub["test_samples"] == full["test_samples"]
+    with pytest.raises(SystemExit, match="train runs"):
+        bench_main(common + ["--train-runs", str(full["train_runs"] + 1)])
