@@ -23,7 +23,6 @@ import numpy as np
 
 from demseis.errors import ConfigError, InputError, SimulationError, StoreError
 from demseis.generator.config import Config, parse_config
-from demseis.generator.workers import set_worker_env, start_forkserver, worker_start_method
 from demseis.generator.pipeline import (
     PARAM_CODES,
     array_dtypes,
@@ -32,6 +31,7 @@ from demseis.generator.pipeline import (
     run_shard,
     sample_shape,
 )
+from demseis.generator.workers import set_worker_env, start_forkserver, worker_start_method
 
 #: ``--dry-run`` cost model, fitted to the seed-scale run measured by benchmarks/dem_seed.py
 #: (11,224 elements: 25.8 s faulting for ~45,900 steps, 15.7 s settling, one core)
@@ -540,9 +540,9 @@ def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: in
     """A LocalCluster of single-threaded worker processes and its client, the Numba cache warm.
 
     With the forkserver (:func:`demseis.generator.workers.worker_start_method`), the server warms
-    the cache once before it forks any worker. With spawn, the cache is warmed in a thread of the driver while the worker
-    processes start: tasks are submitted only after both, so no worker compiles a kernel the
-    driver is compiling.
+    the cache once before it forks any worker. With spawn, the cache is warmed in a thread of
+    the driver while the worker processes start: tasks are submitted only after both, so no
+    worker compiles a kernel the driver is compiling.
     """
     import threading
 
