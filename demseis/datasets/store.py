@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from demseis import __version__
-from demseis.datasets._shardio import ArrayMeta, array_meta, put_file, write_block
+from demseis.datasets._shardio import PARTIAL_SUFFIX, ArrayMeta, array_meta, put_file, write_block
 from demseis.types import Snapshot
 from demseis.errors import InputError, StoreError
 
@@ -1082,10 +1082,10 @@ def record_failures(path: str | Path, failures: Mapping[int, str]) -> dict[str, 
     return out
 
 
-# zarr's LocalStore and demseis's own writer (_shardio.put_file) write each file as
-# ``<name>.<uuid4 hex>.partial`` and rename it into place; a writer killed between the two
-# leaves the temporary file behind
-_PARTIAL_WRITE = re.compile(r"\.[0-9a-f]{32}\.partial$")
+# zarr's LocalStore and demseis's own writer (_shardio.put_file, _shardio.temporary_name) write
+# each file as ``<name>.<uuid4 hex>.partial`` and rename it into place; a writer killed between
+# the two leaves the temporary file behind
+_PARTIAL_WRITE = re.compile(r"\.[0-9a-f]{32}" + re.escape(PARTIAL_SUFFIX) + "$")
 
 
 def remove_partial_writes(path: str | Path) -> list[Path]:
@@ -1099,7 +1099,7 @@ def remove_partial_writes(path: str | Path) -> list[Path]:
     Returns the files removed.
     """
     removed = []
-    for f in Path(path).rglob("*.partial"):
+    for f in Path(path).rglob("*" + PARTIAL_SUFFIX):
         if f.is_file() and _PARTIAL_WRITE.search(f.name):
             f.unlink(missing_ok=True)
             removed.append(f)
