@@ -31,7 +31,12 @@ from demseis.generator.pipeline import (
     run_shard,
     sample_shape,
 )
-from demseis.generator.workers import set_worker_env, start_forkserver, worker_start_method
+from demseis.generator.workers import (
+    set_worker_env,
+    sigint_ignored,
+    start_forkserver,
+    worker_start_method,
+)
 
 #: ``--dry-run`` cost model, fitted to the seed-scale run measured by benchmarks/dem_seed.py
 #: (11,224 elements: 25.8 s faulting for ~45,900 steps, 15.7 s settling, one core)
@@ -485,22 +490,6 @@ def _sigint_deferred() -> Any:
         raise KeyboardInterrupt
 
 
-@contextlib.contextmanager
-def _sigint_ignored() -> Any:
-    """SIGINT ignored (SIG_IGN) for the block: processes spawned meanwhile inherit it."""
-    import signal
-    import threading
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
-
-
 def _wait_spawned(n: int, timeout_s: float = 60.0) -> None:
     """Wait until ``n`` worker processes (multiprocessing spawn children) exist."""
     import psutil
@@ -596,7 +585,7 @@ def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: in
             else:
                 # Spawned workers are started with SIGINT ignored, so they ignore it from their
                 # first import on; the driver ignores it only for the ~0.1 s the spawns take.
-                with _sigint_ignored():
+                with sigint_ignored():
                     cluster.scale(n)
                     _wait_spawned(n)
             # Tasks go out as soon as one worker is up (the others join as they start), and

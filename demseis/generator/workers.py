@@ -18,7 +18,9 @@ forkserver,spawn`` (README, "Measured performance").
 
 from __future__ import annotations
 
+import contextlib
 import os
+from collections.abc import Iterator
 
 #: thread counts of the worker processes: one task per worker, one thread per task
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
@@ -67,17 +69,26 @@ def start_forkserver() -> None:
         return
     import multiprocessing
     import multiprocessing.forkserver
-    import signal
-    import threading
 
     set_worker_env()
     multiprocessing.get_context("forkserver").set_forkserver_preload(
         ["demseis.generator._forkserver_preload"])
-    if threading.current_thread() is not threading.main_thread():
+    with sigint_ignored():
         multiprocessing.forkserver.ensure_running()
+
+
+@contextlib.contextmanager
+def sigint_ignored() -> Iterator[None]:
+    """SIGINT ignored (SIG_IGN) for the block, in the main thread (elsewhere a no-op): processes
+    started meanwhile inherit it."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
         return
     old = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
-        multiprocessing.forkserver.ensure_running()
+        yield
     finally:
         signal.signal(signal.SIGINT, old)
