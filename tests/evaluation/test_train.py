@@ -54,6 +54,50 @@ def test_learnability_benchmark_prints_one_json_line(tmp_path, capsys):
                 assert 0.0 <= out[f"{split}_{k}_tol{tol}"] <= 1.0 or np.isnan(
                     out[f"{split}_{k}_tol{tol}"])
     assert out["test_runs"] >= 1 and out["train_runs"] >= 1
+    # the threshold chosen on the train runs: one of the 99 sweep thresholds; the best F1 over
+    # the sweep bounds both the F1 at 0.5 (itself a sweep threshold) and any other threshold's
+    for tol in (2, 4):
+        t = out[f"train_ods_threshold_tol{tol}"]
+        assert 0 < t < 1 and abs(t * 100 - round(t * 100)) < 1e-6
+        assert out[f"train_ods_f1_tol{tol}"] >= out[f"train_f1_tol{tol}"] - 1e-4
+        assert out[f"test_ods_f1_tol{tol}"] >= out[f"test_f1_at_train_threshold_tol{tol}"] - 1e-4
+        assert out[f"test_ods_f1_tol{tol}"] >= out[f"test_f1_tol{tol}"] - 1e-4
+    assert out["ods_f1_gap_tol2"] == pytest.approx(
+        out["train_ods_f1_tol2"] - out["test_f1_at_train_threshold_tol2"], abs=2e-4)
+
+
+def test_learnability_benchmark_test_f1_at_train_threshold_is_read_off_the_test_curve(
+        tmp_path, capsys, monkeypatch):
+    """The held-out F1 at the train runs' best threshold equals a fresh score of the held-out
+    predictions at that threshold (the benchmark reads it off the test F1 curve)."""
+    from demseis.evaluation import score
+    from demseis.evaluation import train as train_mod
+
+    store = tmp_path / "tiny.zarr"
+    _tiny_store(store)
+    seen = []
+    real_predict = train_mod.predict_sections
+
+    def spy(model, sections, **kw):
+        p = real_predict(model, sections, **kw)
+        seen.append(p)
+        return p
+
+    monkeypatch.setattr(train_mod, "predict_sections", spy)
+    bench_main = runpy.run_path(str(BENCH))["main"]
+    assert bench_main([str(store), "--steps", "2", "--crop", "16", "--batch", "4", "--base", "4",
+                       "--threads", "1", "--test-fraction", "0.4", "--device", "cpu"]) == 0
+    out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    from demseis.datasets import FaultSegDataset
+
+    ds = FaultSegDataset(store, inputs=("seismic",), targets=("fault",), split="test",
+                         split_fractions=(0.6, 0.0, 0.4))
+    truth = np.stack([ds[i][1].numpy() > 0 for i in range(len(ds))])
+    assert len(seen) == 2 and seen[1].shape == truth.shape
+    for tol in (2, 4):
+        t = out[f"train_ods_threshold_tol{tol}"]
+        direct = score(seen[1], truth, threshold=t, tolerance_px=tol).f1
+        assert out[f"test_f1_at_train_threshold_tol{tol}"] == pytest.approx(direct, abs=1e-4)
 
 
 def test_learnability_benchmark_train_runs_subset_keeps_the_held_out_runs(tmp_path, capsys):
