@@ -18,7 +18,11 @@ Comparing label sets: make stores that differ only in their labels with ``demsei
 (same seismic bytes), then run this on each with the same ``--seed`` and budget.
 
     PYTHONPATH=$PWD python benchmarks/learnability.py STORE [--steps N] [--seed 0]
-        [--train-runs N]
+        [--train-runs N] [--save-pred PRED.npz]
+
+``--save-pred`` writes a few held-out sections (seismic, labels, predicted probabilities, the
+train-chosen thresholds) for ``benchmarks/learnability_figure.py``, which draws label sets side
+by side.
 """
 
 from __future__ import annotations
@@ -48,6 +52,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--train-runs", type=int,
                     help="train on the first N train runs only, the held-out runs unchanged "
                          "(a learning curve on one store: e.g. 64 against all 96 of 128 runs)")
+    ap.add_argument("--save-pred", help="write held-out sections and predictions (.npz)")
+    ap.add_argument("--save-n", type=int, default=4, help="held-out sections saved")
     args = ap.parse_args(argv)
 
     import torch
@@ -102,12 +108,25 @@ def main(argv: list[str] | None = None) -> int:
             else:  # the held-out F1 at the threshold chosen on the train runs (same sweep)
                 k = int(np.argmin(np.abs(r.thresholds - out[f"train_ods_threshold_tol{tol}"])))
                 out[f"test_f1_at_train_threshold_tol{tol}"] = round(float(r.f1_curve[k]), 4)
+        if split == "test" and args.save_pred:
+            save_predictions(args.save_pred, seis, truth, prob, idx, out, args.save_n)
     out["f1_gap_tol2"] = round(out["train_f1_tol2"] - out["test_f1_tol2"], 4)
     out["ods_f1_gap_tol2"] = round(out["train_ods_f1_tol2"]
                                    - out["test_f1_at_train_threshold_tol2"], 4)
     out["seconds"] = round(time.perf_counter() - t0, 1)
     print(json.dumps(out))
     return 0
+
+
+def save_predictions(path: str, seis: np.ndarray, truth: np.ndarray, prob: np.ndarray,
+                     idx: np.ndarray, out: dict, n: int) -> None:
+    """Write ``n`` held-out sections with faults, evenly spaced over the held-out samples."""
+    faulted = np.flatnonzero(truth.reshape(len(truth), -1).any(axis=1))
+    pick = faulted[np.linspace(0, faulted.size - 1, min(n, faulted.size)).round().astype(int)] \
+        if faulted.size else np.zeros(0, int)
+    np.savez_compressed(path, seismic=seis[pick], truth=truth[pick], prob=prob[pick],
+                        sample=idx[pick], threshold_tol2=out["train_ods_threshold_tol2"],
+                        store=out["store"], result=json.dumps(out))
 
 
 if __name__ == "__main__":

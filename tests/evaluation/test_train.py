@@ -116,3 +116,39 @@ def test_learnability_benchmark_train_runs_subset_keeps_the_held_out_runs(tmp_pa
     assert sub["test_runs"] == full["test_runs"] and sub["test_samples"] == full["test_samples"]
     with pytest.raises(SystemExit, match="train runs"):
         bench_main(common + ["--train-runs", str(full["train_runs"] + 1)])
+
+
+def test_learnability_save_pred_and_figure(tmp_path, capsys):
+    """--save-pred keeps held-out sections with faults and their predictions; the figure script
+    draws two label sets side by side and refuses files of different sections."""
+    store = tmp_path / "tiny.zarr"
+    _tiny_store(store)
+    bench_main = runpy.run_path(str(BENCH))["main"]
+    pred = tmp_path / "p.npz"
+    assert bench_main([str(store), "--steps", "1", "--crop", "16", "--batch", "4", "--base", "4",
+                       "--threads", "1", "--test-fraction", "0.4", "--device", "cpu",
+                       "--save-pred", str(pred), "--save-n", "2"]) == 0
+    out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    with np.load(pred) as z:
+        d = {k: z[k] for k in z.files}
+    n = d["seismic"].shape[0]
+    assert 1 <= n <= 2 and d["truth"].shape == d["prob"].shape == d["seismic"].shape
+    assert all(d["truth"][i].any() for i in range(n))  # only sections with a fault
+    assert float(d["threshold_tol2"]) == out["train_ods_threshold_tol2"]
+    from demseis.datasets import FaultSegDataset
+
+    ds = FaultSegDataset(store, inputs=("seismic",), targets=("fault",), split="test",
+                         split_fractions=(0.6, 0.0, 0.4))
+    for i, s in enumerate(d["sample"]):
+        np.testing.assert_array_equal(d["seismic"][i], ds[int(s)][0][0].numpy())
+
+    fig_main = runpy.run_path(str(BENCH.with_name("learnability_figure.py")))["main"]
+    png = tmp_path / "f.png"
+    assert fig_main([f"a={pred}", f"b={pred}", "--out", str(png)]) == 0
+    assert png.stat().st_size > 1000
+    other = tmp_path / "q.npz"
+    np.savez(other, **{**d, "seismic": d["seismic"] + 1})
+    with pytest.raises(SystemExit, match="not the same held-out sections"):
+        fig_main([f"a={pred}", f"b={other}", "--out", str(png)])
+    with pytest.raises(SystemExit, match="NAME=PRED.npz"):
+        fig_main([str(pred), "--out", str(png)])
