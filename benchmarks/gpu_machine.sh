@@ -128,7 +128,8 @@ learn)
     # made, finished or (already complete) left as it is: the same seed gives the same seismic
     s=$(timed_generate "$W_MANY" "$RUNS_LEARN" "$store" --resume "${extra[@]}")
     emit "{\"stage\": \"learn_store\", \"labels\": \"$labels\", \"runs\": $RUNS_LEARN, \"wall_s\": $s}"
-    args=("$store" --steps "$STEPS" --seed 0)
+    # a few held-out sections and predictions come back for benchmarks/learnability_figure.py
+    args=("$store" --steps "$STEPS" --seed 0 --save-pred "$OUT/pred_$labels.npz")
     [ "$labels" = new48 ] && args+=(--train-runs "$HALF")
     [ -n "$DEV" ] && args+=("$DEV")
     line=$(python benchmarks/learnability.py "${args[@]}" | tail -1)

@@ -45,3 +45,4 @@ def test_learn_half_keeps_the_held_out_runs(tmp_path):
     assert [r["stage"] for r in rows] == ["learn_store", "learn"]
     result = rows[1]["result"]
     assert result["train_runs_used"] == 2 and result["test_runs"] == 2
+    assert (tmp_path / "out" / "pred_new48.npz").stat().st_size > 0  # for the figure
