@@ -14,6 +14,10 @@ threshold_tol*``) and the held-out F1 at that threshold (``test_f1_at_train_thre
 a threshold chosen without looking at the held-out runs. ``test_ods_f1_tol*`` (the held-out
 runs' own best threshold) is an optimistic ceiling, for reference only.
 
+Which labels the network misses: ``test_recall_by_slip_tol2`` is the held-out recall at 2 px
+(at the train-chosen threshold) of the labelled pixels grouped by their ``slip_m`` (m; labels
+without a slip value, e.g. the legacy strain band's, are left out), with the pixel counts.
+
 Comparing label sets: make stores that differ only in their labels with ``demseis relabel``
 (same seismic bytes), then run this on each with the same ``--seed`` and budget.
 
@@ -108,6 +112,13 @@ def main(argv: list[str] | None = None) -> int:
             else:  # the held-out F1 at the threshold chosen on the train runs (same sweep)
                 k = int(np.argmin(np.abs(r.thresholds - out[f"train_ods_threshold_tol{tol}"])))
                 out[f"test_f1_at_train_threshold_tol{tol}"] = round(float(r.f1_curve[k]), 4)
+        if split == "test":
+            if "slip_m" in ds.layout.arrays:
+                sds = FaultSegDataset(args.store, inputs=("seismic",), targets=("slip_m",),
+                                      split=split, split_fractions=fr)
+                slip = np.stack([sds[int(i)][1].numpy() for i in idx])
+                out["test_recall_by_slip_tol2"] = recall_by_slip(
+                    prob >= out["train_ods_threshold_tol2"], truth, slip, 2)
         if split == "test" and args.save_pred:
             save_predictions(args.save_pred, seis, truth, prob, idx, out, args.save_n)
     out["f1_gap_tol2"] = round(out["train_f1_tol2"] - out["test_f1_tol2"], 4)
@@ -116,6 +127,33 @@ def main(argv: list[str] | None = None) -> int:
     out["seconds"] = round(time.perf_counter() - t0, 1)
     print(json.dumps(out))
     return 0
+
+
+SLIP_BANDS_M = (10.0, 20.0, 40.0, 80.0, 160.0, np.inf)
+
+
+def recall_by_slip(pred: np.ndarray, truth: np.ndarray, slip: np.ndarray,
+                   tol: float) -> dict[str, list]:
+    """Recall (share of labelled pixels with a predicted pixel within ``tol`` px) per slip band.
+
+    Returns ``{"lo-hi": [recall, pixels]}`` over the bands of :data:`SLIP_BANDS_M`, plus
+    ``"below"`` for labelled pixels with 0 < slip < the first band edge.
+    """
+    from scipy.ndimage import binary_dilation
+
+    from demseis.evaluation.scoring import disk_footprint
+
+    foot = disk_footprint(tol)
+    hit = np.stack([binary_dilation(p, structure=foot) for p in pred])
+    lab = truth & (slip > 0)
+    edges = (0.0,) + SLIP_BANDS_M
+    res = {}
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        m = lab & (slip >= lo) & (slip < hi)
+        n = int(m.sum())
+        key = "below" if lo == 0.0 else f"{lo:g}-{hi:g}"
+        res[key] = [round(float(hit[m].mean()), 4) if n else None, n]
+    return res
 
 
 def save_predictions(path: str, seis: np.ndarray, truth: np.ndarray, prob: np.ndarray,

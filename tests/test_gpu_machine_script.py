@@ -46,3 +46,6 @@ def test_learn_half_keeps_the_held_out_runs(tmp_path):
     result = rows[1]["result"]
     assert result["train_runs_used"] == 2 and result["test_runs"] == 2
     assert (tmp_path / "out" / "pred_new48.npz").stat().st_size > 0  # for the figure
+    bands = result["test_recall_by_slip_tol2"]  # a generated store has slip_m
+    assert set(bands) == {"below", "10-20", "20-40", "40-80", "80-160", "160-inf"}
+    assert sum(n for _, n in bands.values()) > 0

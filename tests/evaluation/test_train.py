@@ -62,6 +62,7 @@ def test_learnability_benchmark_prints_one_json_line(tmp_path, capsys):
         assert out[f"train_ods_f1_tol{tol}"] >= out[f"train_f1_tol{tol}"] - 1e-4
         assert out[f"test_ods_f1_tol{tol}"] >= out[f"test_f1_at_train_threshold_tol{tol}"] - 1e-4
         assert out[f"test_ods_f1_tol{tol}"] >= out[f"test_f1_tol{tol}"] - 1e-4
+    assert "test_recall_by_slip_tol2" not in out  # this store has no slip_m array
     assert out["ods_f1_gap_tol2"] == pytest.approx(
         out["train_ods_f1_tol2"] - out["test_f1_at_train_threshold_tol2"], abs=2e-4)
 
@@ -152,3 +153,32 @@ def test_learnability_save_pred_and_figure(tmp_path, capsys):
         fig_main([f"a={pred}", f"b={other}", "--out", str(png)])
     with pytest.raises(SystemExit, match="NAME=PRED.npz"):
         fig_main([str(pred), "--out", str(png)])
+
+
+def test_recall_by_slip_pools_to_the_scorers_recall():
+    """The per-band recalls, weighted by their pixel counts, give the scorer's recall (every
+    labelled pixel has a slip here), and a hand-made case gives the expected bands."""
+    recall_by_slip = runpy.run_path(str(BENCH))["recall_by_slip"]
+    from demseis.evaluation import score
+
+    rng = np.random.default_rng(3)
+    truth = np.zeros((3, 40, 50), bool)
+    truth[:, 5:35, 20] = True
+    truth[:, 10, 5:45] = True
+    slip = np.where(truth, rng.uniform(10, 200, truth.shape), 0.0)
+    prob = rng.uniform(size=truth.shape).astype(np.float32) * 0.6
+    prob[:, 5:20, 21] = 0.9  # a part of the vertical trace, 1 px off
+    res = recall_by_slip(prob >= 0.5, truth, slip, 2)
+    n = sum(v[1] for v in res.values())
+    assert n == truth.sum() and res["below"] == [None, 0]
+    pooled = sum(v[0] * v[1] for v in res.values() if v[1]) / n
+    assert pooled == pytest.approx(score(prob, truth, threshold=0.5, tolerance_px=2).recall,
+                                   abs=1e-4)
+    # a single labelled pixel of 30 m slip next to a prediction: recall 1 in the 20-40 band
+    t = np.zeros((1, 9, 9), bool)
+    t[0, 4, 4] = True
+    p = np.zeros((1, 9, 9), bool)
+    p[0, 4, 6] = True
+    r = recall_by_slip(p, t, np.where(t, 30.0, 0.0), 2)
+    assert r["20-40"] == [1.0, 1] and r["10-20"] == [None, 0]
+    assert recall_by_slip(p, t, np.where(t, 30.0, 0.0), 1)["20-40"] == [0.0, 1]
