@@ -7,12 +7,14 @@ rungs (worst snapshot), loops, whether every labelled cell slips >= min_slip_m, 
 ``label_maps`` time per snapshot (seed preset: the figure to compare).
 
     python benchmarks/labels_dem_coverage.py [--runs quick:0,1 seed:0] [--cache DIR] \
-        [--strand-sigma-cells 0] [--kinematic] [--ab-timing]
+        [--strand-sigma-cells 0] [--kinematic] [--ab-timing] [--metric chessboard]
 
 ``--cache DIR`` pickles the DEM snapshots of each run there and reuses them (the labels are
 what is measured). ``--kinematic`` adds the same coverage on the 32 planar kinematic faults of
 tests/labels/test_traces.py (rigid blocks: one exact slip surface), for the labels and for the
 true plane itself: the most a one-cell line on the true fault reaches under this definition.
+``--metric chessboard`` measures "within 2 cells" in the same box metric as the jump's ±2-cell
+offsets (default: Euclidean distance).
 """
 
 from __future__ import annotations
@@ -44,7 +46,8 @@ def _snapshots(preset: str, run: int, cache: str | None):
     return snaps
 
 
-def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float | None = None) -> dict:
+def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float | None = None,
+            metric: str = "euclidean") -> dict:
     """Coverage, rungs, loops, slip floor and label_maps time of one DEM run."""
     import dataclasses
 
@@ -74,7 +77,7 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
             continue
         f = maps["fault"].astype(bool)
         jump, rock = jump_field(snap, disp[k][0], disp[k][1], grid)
-        hi, near = jump_coverage(f, jump, rock, min_slip)
+        hi, near = jump_coverage(f, jump, rock, min_slip, metric=metric)
         n_hi += hi
         n_near += near
         per_snap.append(round(near / hi, 3) if hi else None)
@@ -119,7 +122,7 @@ def ab_timing(preset: str, run: int, cache: str | None, repeats: int = 3) -> dic
             "ratio": round(med["strands"] / med["single"], 2)}
 
 
-def kinematic() -> dict:
+def kinematic(metric: str = "euclidean") -> dict:
     """Coverage of the labels and of the true plane on the planar kinematic faults."""
     from demseis.labels import LabelConfig, label_maps, strain_history
     from demseis.labels.coverage import jump_coverage, jump_field
@@ -156,7 +159,8 @@ def kinematic() -> dict:
                     region = rock & (zz < height - slip * np.sin(th) - 2 * cell) & (zz > 5 * cell)
                     region &= (xx > trail) if side == "right" else (xx < width - trail)
                     for out, f in ((labels, maps["fault"]), (plane, line)):
-                        hi, near = jump_coverage(f, jump, region, cfg.min_slip_for(cell))
+                        hi, near = jump_coverage(f, jump, region, cfg.min_slip_for(cell),
+                                                 metric=metric)
                         out.append(near / hi)
     return {"cases": len(labels), "labels_median": round(float(np.median(labels)), 3),
             "labels_min": round(float(np.min(labels)), 3),
@@ -176,13 +180,16 @@ def main() -> None:
                     help="also time label_maps single traces vs strands, interleaved")
     ap.add_argument("--kinematic", action="store_true",
                     help="also the planar kinematic faults (labels and true plane)")
+    ap.add_argument("--metric", choices=("euclidean", "chessboard"), default="euclidean",
+                    help="distance for 'within 2 cells of a label'")
     args = ap.parse_args()
     out: dict = {"benchmark": "labels_dem_coverage", "strand_sigma_cells": args.strand_sigma_cells,
-                 "runs": []}
+                 "metric": args.metric, "runs": []}
     for item in args.runs:
         preset, _, runs = item.partition(":")
         for r in (runs or "0").split(","):
-            out["runs"].append(measure(preset, int(r), args.cache, args.strand_sigma_cells))
+            out["runs"].append(measure(preset, int(r), args.cache, args.strand_sigma_cells,
+                                       args.metric))
     by: dict = {}
     for r in out["runs"]:
         by.setdefault(r["preset"], []).append(r)
@@ -192,7 +199,7 @@ def main() -> None:
     if args.ab_timing:
         out["label_maps_ab"] = [ab_timing(r["preset"], r["run"], args.cache) for r in out["runs"]]
     if args.kinematic:
-        out["kinematic_planar"] = kinematic()
+        out["kinematic_planar"] = kinematic(args.metric)
     print(json.dumps(out))
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from demseis.errors import InputError
 from demseis.labels.maps import rasterise_strain
 
 
@@ -57,11 +58,20 @@ def jump_field(snapshot, displacement: np.ndarray, birth: np.ndarray, grid,
 
 
 def jump_coverage(fault: np.ndarray, jump: np.ndarray, rock: np.ndarray, min_slip_m: float,
-                  within_cells: float = 2.0) -> tuple[int, int]:
-    """(cells with jump >= 2 min_slip_m, those of them within ``within_cells`` of ``fault``)."""
+                  within_cells: float = 2.0, metric: str = "euclidean") -> tuple[int, int]:
+    """(cells with jump >= 2 min_slip_m, those of them within ``within_cells`` of ``fault``).
+
+    ``metric``: how "within" is measured, ``"euclidean"`` (default) or ``"chessboard"``
+    (max(|d_row|, |d_col|), the box in which :func:`jump_field` looks for the jump).
+    """
+    if metric not in ("euclidean", "chessboard"):
+        raise InputError(f"metric = {metric!r}; allowed: 'euclidean', 'chessboard'")
     hi = (np.asarray(jump) >= 2.0 * min_slip_m) & np.asarray(rock, dtype=bool)
     f = np.asarray(fault, dtype=bool)
     if not f.any():
         return int(hi.sum()), 0
-    near = ndimage.distance_transform_edt(~f) <= within_cells
+    if metric == "euclidean":
+        near = ndimage.distance_transform_edt(~f) <= within_cells
+    else:
+        near = ndimage.distance_transform_cdt(~f, metric="chessboard") <= within_cells
     return int(hi.sum()), int((hi & near).sum())

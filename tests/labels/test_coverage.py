@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from demseis.errors import InputError
 from demseis.labels.coverage import jump_coverage, jump_field
 from demseis.labels.maps import rasterise_strain
 from demseis.seismic.raster import rasterise
@@ -55,3 +57,19 @@ def test_jump_field_matches_reference_and_sees_a_step():
     assert n_hi == int((hi & rock).sum())
     assert n_near == int((hi & rock & (np.abs(cols - 20) <= 2)).sum()) > 0.8 * n_hi
     assert jump_coverage(np.zeros_like(line), jump, rock, 10.0) == (n_hi, 0)
+
+
+def test_jump_coverage_chessboard_metric_counts_the_diagonal_of_the_box():
+    """A high-jump cell 2 rows and 2 columns from the only label cell: outside 2 cells in the
+    Euclidean metric (2.83), inside in the chessboard metric (the jump's own +-2 box)."""
+    fault = np.zeros((9, 9), bool)
+    fault[4, 4] = True
+    jump = np.zeros((9, 9))
+    jump[6, 6] = 50.0  # diagonal, 2 cells each way
+    jump[4, 6] = 50.0  # straight, 2 cells
+    jump[4, 7] = 50.0  # straight, 3 cells: outside either way
+    rock = np.ones((9, 9), bool)
+    assert jump_coverage(fault, jump, rock, 10.0) == (3, 1)
+    assert jump_coverage(fault, jump, rock, 10.0, metric="chessboard") == (3, 2)
+    with pytest.raises(InputError, match="metric"):
+        jump_coverage(fault, jump, rock, 10.0, metric="manhattan")
