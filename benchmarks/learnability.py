@@ -9,9 +9,9 @@ base 16). Runs are split 75 / 0 / 25 % train / val / test by default (held-out =
 
 A fixed threshold of 0.5 favours whichever label set the loss's positive weight happens to
 suit (it is capped at 50, and sparse labels hit the cap), so the line also gives, per
-tolerance, the threshold that maximises the pooled F1 on the *train* runs (``train_ods_
-threshold_tol*``) and the held-out F1 at that threshold (``test_f1_at_train_threshold_tol*``):
-a threshold chosen without looking at the held-out runs. ``test_ods_f1_tol*`` (the held-out
+tolerance, the threshold that maximises the pooled F1 on the *train* runs
+(``train_ods_threshold_tol*``) and the held-out F1 at that threshold
+(``test_f1_at_train_threshold_tol*``): a threshold chosen without looking at the held-out runs. ``test_ods_f1_tol*`` (the held-out
 runs' own best threshold) is an optimistic ceiling, for reference only.
 
 Which labels the network misses: ``test_recall_by_slip_tol2`` is the held-out recall at 2 px
@@ -112,13 +112,12 @@ def main(argv: list[str] | None = None) -> int:
             else:  # the held-out F1 at the threshold chosen on the train runs (same sweep)
                 k = int(np.argmin(np.abs(r.thresholds - out[f"train_ods_threshold_tol{tol}"])))
                 out[f"test_f1_at_train_threshold_tol{tol}"] = round(float(r.f1_curve[k]), 4)
-        if split == "test":
-            if "slip_m" in ds.layout.arrays:
-                sds = FaultSegDataset(args.store, inputs=("seismic",), targets=("slip_m",),
-                                      split=split, split_fractions=fr)
-                slip = np.stack([sds[int(i)][1].numpy() for i in idx])
-                out["test_recall_by_slip_tol2"] = recall_by_slip(
-                    prob >= out["train_ods_threshold_tol2"], truth, slip, 2)
+        if split == "test" and "slip_m" in ds.layout.arrays:
+            sds = FaultSegDataset(args.store, inputs=("seismic",), targets=("slip_m",),
+                                  split=split, split_fractions=fr)
+            slip = np.stack([sds[int(i)][1].numpy() for i in idx])
+            out["test_recall_by_slip_tol2"] = recall_by_slip(
+                prob >= out["train_ods_threshold_tol2"], truth, slip, 2)
         if split == "test" and args.save_pred:
             save_predictions(args.save_pred, seis, truth, prob, idx, out, args.save_n)
     out["f1_gap_tol2"] = round(out["train_f1_tol2"] - out["test_f1_tol2"], 4)
