@@ -11,8 +11,9 @@ A fixed threshold of 0.5 favours whichever label set the loss's positive weight 
 suit (it is capped at 50, and sparse labels hit the cap), so the line also gives, per
 tolerance, the threshold that maximises the pooled F1 on the *train* runs
 (``train_ods_threshold_tol*``) and the held-out F1 at that threshold
-(``test_f1_at_train_threshold_tol*``): a threshold chosen without looking at the held-out runs. ``test_ods_f1_tol*`` (the held-out
-runs' own best threshold) is an optimistic ceiling, for reference only.
+(``test_f1_at_train_threshold_tol*``): a threshold chosen without looking at the held-out runs.
+``test_ods_f1_tol*`` (the held-out runs' own best threshold) is an optimistic ceiling, for
+reference only.
 
 Which labels the network misses: ``test_recall_by_slip_tol2`` is the held-out recall at 2 px
 (at the train-chosen threshold) of the labelled pixels grouped by their ``slip_m`` (m; labels
@@ -92,14 +93,19 @@ def main(argv: list[str] | None = None) -> int:
     rng = np.random.default_rng(args.seed)
     out["train_runs_used"] = None if where is None else len(where["run_id"])
     for split in ("train", "test"):
-        ds = FaultSegDataset(args.store, inputs=("seismic",), targets=("fault",), split=split,
-                             split_fractions=fr, where=where if split == "train" else None)
+        kw = dict(inputs=("seismic",), split=split, split_fractions=fr,
+                  where=where if split == "train" else None)
+        ds = FaultSegDataset(args.store, targets=("fault",), **kw)
+        with_slip = split == "test" and "slip_m" in ds.layout.arrays
+        if with_slip:  # the held-out slip too, read with the same samples
+            ds = FaultSegDataset(args.store, targets=("fault", "slip_m"), **kw)
         idx = np.arange(len(ds))
         if split == "train" and len(ds) > args.max_train_eval:
             idx = np.sort(rng.choice(len(ds), args.max_train_eval, replace=False))
         pairs = [ds[int(i)] for i in idx]
         seis = np.stack([x[0].numpy() for x, _ in pairs])
-        truth = np.stack([(y.numpy() > 0) for _, y in pairs])
+        fault = [y["fault"] if with_slip else y for _, y in pairs]
+        truth = np.stack([(y.numpy() > 0) for y in fault])
         prob = predict_sections(model, seis, device=info["device"])
         out[f"{split}_samples"] = len(idx)
         out[f"{split}_runs"] = int(len(np.unique(ds.run_ids[idx])))
@@ -112,10 +118,8 @@ def main(argv: list[str] | None = None) -> int:
             else:  # the held-out F1 at the threshold chosen on the train runs (same sweep)
                 k = int(np.argmin(np.abs(r.thresholds - out[f"train_ods_threshold_tol{tol}"])))
                 out[f"test_f1_at_train_threshold_tol{tol}"] = round(float(r.f1_curve[k]), 4)
-        if split == "test" and "slip_m" in ds.layout.arrays:
-            sds = FaultSegDataset(args.store, inputs=("seismic",), targets=("slip_m",),
-                                  split=split, split_fractions=fr)
-            slip = np.stack([sds[int(i)][1].numpy() for i in idx])
+        if with_slip:
+            slip = np.stack([y["slip_m"].numpy() for _, y in pairs])
             out["test_recall_by_slip_tol2"] = recall_by_slip(
                 prob >= out["train_ods_threshold_tol2"], truth, slip, 2)
         if split == "test" and args.save_pred:
@@ -138,12 +142,9 @@ def recall_by_slip(pred: np.ndarray, truth: np.ndarray, slip: np.ndarray,
     Returns ``{"lo-hi": [recall, pixels]}`` over the bands of :data:`SLIP_BANDS_M`, plus
     ``"below"`` for labelled pixels with 0 < slip < the first band edge.
     """
-    from scipy.ndimage import binary_dilation
+    from demseis.evaluation.scoring import within_tolerance  # the scorer's matching rule
 
-    from demseis.evaluation.scoring import disk_footprint
-
-    foot = disk_footprint(tol)
-    hit = np.stack([binary_dilation(p, structure=foot) for p in pred])
+    hit = np.stack([within_tolerance(p, tol) for p in pred])
     lab = truth & (slip > 0)
     edges = (0.0,) + SLIP_BANDS_M
     res = {}

@@ -50,13 +50,13 @@ def draw(sets: list[tuple[str, dict]], path: str) -> None:
         clip = np.percentile(np.abs(seis[i]), 99)
         axes[i, 0].imshow(seis[i], cmap="gray", vmin=-clip, vmax=clip, aspect="auto")
         for j, (name, d) in enumerate(sets):
-            r = json.loads(str(d["result"]))
             t = float(d["threshold_tol2"])
             a, b = axes[i, 1 + 2 * j], axes[i, 2 + 2 * j]
             a.imshow(d["truth"][i], cmap="gray_r", vmin=0, vmax=1, aspect="auto")
             b.imshow(d["prob"][i], cmap="magma", vmin=0, vmax=1, aspect="auto")
             b.contour(d["prob"][i] >= t, levels=[0.5], colors="cyan", linewidths=0.5)
             if i == 0:
+                r = json.loads(str(d["result"]))
                 a.set_title(f"{name}: labels", fontsize=8)
                 b.set_title(f"{name}: prediction\nheld-out F1@2 {r['test_f1_at_train_threshold_tol2']:.2f}"
                             f", AP@2 {r['test_ap_tol2']:.2f}", fontsize=8)

@@ -66,6 +66,7 @@ __all__ = [
     "count_samples",
     "default_thresholds",
     "disk_footprint",
+    "within_tolerance",
     "metrics_from_counts",
     "score",
     "score_store",
@@ -89,6 +90,14 @@ def disk_footprint(radius_px: float) -> NDArray[np.bool_]:
     k = int(np.floor(radius_px))
     dy, dx = np.mgrid[-k : k + 1, -k : k + 1]
     return (dy * dy + dx * dx) <= radius_px * radius_px
+
+
+def within_tolerance(mask: NDArray[np.bool_], tol: float) -> NDArray[np.bool_]:
+    """Pixels within Euclidean distance ``tol`` of a True pixel of the 2-D ``mask`` (the
+    matching rule above: ``distance_transform_edt(~mask) <= tol``; all False for an empty mask)."""
+    if not mask.any():
+        return np.zeros_like(mask)
+    return ndimage.distance_transform_edt(~mask) <= tol
 
 
 @dataclass(frozen=True)
@@ -353,16 +362,13 @@ def count_samples(pred: ArrayLike, truth: ArrayLike, threshold: float = 0.5,
     for i in range(n):
         pi, ti = p[i], t[i]
         pos = pi >= pi.dtype.type(threshold)
-        has_truth = bool(ti.any())
         if tol == 0:
             near_truth = ti
             near_pred = pos
             reach = pi  # the prediction seen from a labelled pixel
         else:
-            near_truth = (ndimage.distance_transform_edt(~ti) <= tol) if has_truth \
-                else np.zeros_like(ti)
-            near_pred = (ndimage.distance_transform_edt(~pos) <= tol) if pos.any() \
-                else np.zeros_like(pos)
+            near_truth = within_tolerance(ti, tol)
+            near_pred = within_tolerance(pos, tol)
             reach = ndimage.maximum_filter(pi, footprint=foot, mode="constant", cval=0.0)
         out["n_pred"][i] = int(pos.sum())
         out["n_truth"][i] = int(ti.sum())
