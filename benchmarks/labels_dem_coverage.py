@@ -3,17 +3,21 @@
 Coverage = share of the cells whose displacement jump (:func:`demseis.labels.coverage.jump_field`,
 from the particles, independent of the extraction) is >= 2 x min_slip_m that lie within 2
 cells of a fault label, pooled over the snapshots after the first of each run. Also per run:
-rungs (worst snapshot), loops, whether every labelled cell slips >= min_slip_m, and the median
+rungs (worst snapshot), loops, whether every labelled cell slips >= min_slip_m, the missed
+high-jump cells by their distance to the nearest label (cells), and the median
 ``label_maps`` time per snapshot (seed preset: the figure to compare).
 
     python benchmarks/labels_dem_coverage.py [--runs quick:0,1 seed:0] [--cache DIR] \
-        [--strand-sigma-cells 0] [--kinematic] [--ab-timing] [--metric chessboard]
+        [--strand-sigma-cells 0] [--set KEY=VALUE ...] [--kinematic] [--ab-timing] \
+        [--metric chessboard]
 
 ``--cache DIR`` pickles the DEM snapshots of each run there and reuses them (the labels are
 what is measured). ``--kinematic`` adds the same coverage on the 32 planar kinematic faults of
 tests/labels/test_traces.py (rigid blocks: one exact slip surface), for the labels and for the
 true plane itself: the most a one-cell line on the true fault reaches under this definition.
-``--metric chessboard`` measures "within 2 cells" in the same box metric as the jump's ±2-cell
+``--set KEY=VALUE`` changes a ``[labels]`` key for the DEM runs (the value in TOML syntax, as in
+a config file: ``--set min_trace_cells=8 --set min_dip_deg=12.5``); the kinematic faults keep
+the defaults. ``--metric chessboard`` measures "within 2 cells" in the same box metric as the jump's ±2-cell
 offsets (default: Euclidean distance).
 """
 
@@ -46,10 +50,56 @@ def _snapshots(preset: str, run: int, cache: str | None):
     return snaps
 
 
-def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float | None = None,
-            metric: str = "euclidean") -> dict:
-    """Coverage, rungs, loops, slip floor and label_maps time of one DEM run."""
+def parse_sets(items: list[str]) -> dict:
+    """``["key=value", ...]`` (values in TOML syntax) as a dict; a bad item raises InputError."""
+    import tomllib
+
+    from demseis.errors import InputError
+
+    out: dict = {}
+    for item in items:
+        key, eq, value = item.partition("=")
+        if not eq or not key.strip():
+            raise InputError(f"--set {item!r}: expected KEY=VALUE")
+        try:
+            out.update(tomllib.loads(f"{key.strip()} = {value.strip()}"))
+        except tomllib.TOMLDecodeError as exc:
+            raise InputError(f"--set {item!r}: the value is not TOML ({exc}); "
+                             "strings need quotes, e.g. method='strain_band'") from None
+    return out
+
+
+def labels_config(base, strand_sigma_cells: float | None = None, sets: dict | None = None):
+    """``base`` (a LabelConfig) with the overrides, validated like a ``[labels]`` table."""
     import dataclasses
+
+    from demseis.labels import LabelConfig
+
+    table = dataclasses.asdict(base)
+    if strand_sigma_cells is not None:
+        table["strand_sigma_cells"] = strand_sigma_cells
+    table.update(sets or {})
+    return LabelConfig.from_mapping(table)
+
+
+#: distance bands (cells, lower bound excluded) of the high-jump cells that a label misses
+MISS_BANDS = {"2-3": (2, 3), "3-5": (3, 5), "5-10": (5, 10), ">10": (10, np.inf)}
+
+
+def _distance(fault: np.ndarray, metric: str) -> np.ndarray:
+    """Distance (cells) of every cell to the nearest label cell in ``metric`` (inf: no label)."""
+    from scipy import ndimage
+
+    if not fault.any():
+        return np.full(fault.shape, np.inf)
+    if metric == "euclidean":
+        return ndimage.distance_transform_edt(~fault)
+    return ndimage.distance_transform_cdt(~fault, metric="chessboard").astype(np.float64)
+
+
+def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float | None = None,
+            metric: str = "euclidean", sets: dict | None = None) -> dict:
+    """Coverage, rungs, loops, slip floor and label_maps time of one DEM run."""
 
     from demseis.generator.config import load_config
     from demseis.generator.pipeline import grid_of
@@ -59,9 +109,7 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
 
     cfg = load_config(None, preset=preset)
     grid = grid_of(cfg)
-    lc = cfg.labels
-    if strand_sigma_cells is not None:
-        lc = dataclasses.replace(lc, strand_sigma_cells=strand_sigma_cells)
+    lc = labels_config(cfg.labels, strand_sigma_cells, sets)
     min_slip = lc.min_slip_for(grid.cell_m)
     snaps = _snapshots(preset, run, cache)
     hist = strain_history(snaps, lc)
@@ -69,6 +117,7 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
     n_hi = n_near = loops = 0
     rungs, times, slip_ok = [], [], True
     per_snap = []
+    misses = dict.fromkeys(MISS_BANDS, 0)
     for k, snap in enumerate(snaps):
         t0 = time.perf_counter()
         maps = label_maps(snap, hist[k], grid, lc, displacement=disp[k])
@@ -81,6 +130,10 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
         n_hi += hi
         n_near += near
         per_snap.append(round(near / hi, 3) if hi else None)
+        missed = (jump >= 2.0 * min_slip) & rock
+        dist = _distance(f, metric)
+        for band, (lo, up) in MISS_BANDS.items():
+            misses[band] += int((missed & (dist > lo) & (dist <= up)).sum())
         if f.any():
             rungs.append(rung_fraction(f))
             loops += loop_count(f)
@@ -88,7 +141,7 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
     return {"preset": preset, "run": run, "coverage": round(n_near / n_hi, 4) if n_hi else None,
             "n_high_jump_cells": n_hi, "per_snapshot": per_snap,
             "max_rungs": round(max(rungs), 4) if rungs else None, "loops": loops,
-            "slip_floor_ok": slip_ok,
+            "slip_floor_ok": slip_ok, "misses_by_distance": misses,
             "label_maps_s_median": round(float(np.median(times[1:] or times)), 3)}
 
 
@@ -176,6 +229,8 @@ def main() -> None:
     ap.add_argument("--cache", default=None, help="directory for pickled DEM snapshots")
     ap.add_argument("--strand-sigma-cells", type=float, default=None,
                     help="override labels.strand_sigma_cells (0: single-scale traces, as before)")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="change a [labels] key for the DEM runs (TOML value); repeatable")
     ap.add_argument("--ab-timing", action="store_true",
                     help="also time label_maps single traces vs strands, interleaved")
     ap.add_argument("--kinematic", action="store_true",
@@ -183,13 +238,21 @@ def main() -> None:
     ap.add_argument("--metric", choices=("euclidean", "chessboard"), default="euclidean",
                     help="distance for 'within 2 cells of a label'")
     args = ap.parse_args()
+    from demseis.errors import DemseisError
+    from demseis.labels import LabelConfig
+
+    try:  # a bad --set fails here, before any DEM run
+        sets = parse_sets(args.set)
+        labels_config(LabelConfig(), args.strand_sigma_cells, sets)
+    except DemseisError as exc:
+        ap.error(str(exc))
     out: dict = {"benchmark": "labels_dem_coverage", "strand_sigma_cells": args.strand_sigma_cells,
-                 "metric": args.metric, "runs": []}
+                 "set": sets, "metric": args.metric, "runs": []}
     for item in args.runs:
         preset, _, runs = item.partition(":")
         for r in (runs or "0").split(","):
             out["runs"].append(measure(preset, int(r), args.cache, args.strand_sigma_cells,
-                                       args.metric))
+                                       args.metric, sets))
     by: dict = {}
     for r in out["runs"]:
         by.setdefault(r["preset"], []).append(r)

@@ -73,3 +73,34 @@ def test_jump_coverage_chessboard_metric_counts_the_diagonal_of_the_box():
     assert jump_coverage(fault, jump, rock, 10.0, metric="chessboard") == (3, 2)
     with pytest.raises(InputError, match="metric"):
         jump_coverage(fault, jump, rock, 10.0, metric="manhattan")
+
+
+def _coverage_benchmark():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "labels_dem_coverage.py"
+    spec = importlib.util.spec_from_file_location("labels_dem_coverage", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_coverage_benchmark_set_overrides_label_keys_like_a_toml_table():
+    from demseis.errors import ConfigError
+    from demseis.labels import LabelConfig
+
+    bench = _coverage_benchmark()
+    sets = bench.parse_sets(["min_trace_cells=8", "min_dip_deg = 12.5", "method='slip_trace'"])
+    assert sets == {"min_trace_cells": 8, "min_dip_deg": 12.5, "method": "slip_trace"}
+    lc = bench.labels_config(LabelConfig(), 0.0, sets)
+    assert (lc.min_trace_cells, lc.min_dip_deg, lc.strand_sigma_cells) == (8, 12.5, 0.0)
+    assert lc.ridge_threshold == LabelConfig().ridge_threshold  # the rest stays
+    with pytest.raises(InputError, match="KEY=VALUE"):
+        bench.parse_sets(["min_trace_cells"])
+    with pytest.raises(InputError, match="not TOML"):
+        bench.parse_sets(["method=strain_band"])
+    with pytest.raises(ConfigError, match="unknown key"):
+        bench.labels_config(LabelConfig(), None, {"min_trace": 8})
+    with pytest.raises(ConfigError, match="min_dip_deg"):
+        bench.labels_config(LabelConfig(), None, {"min_dip_deg": 120.0})
