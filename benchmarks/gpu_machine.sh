@@ -129,7 +129,8 @@ learn)
     s=$(timed_generate "$W_MANY" "$RUNS_LEARN" "$store" --resume "${extra[@]}")
     emit "{\"stage\": \"learn_store\", \"labels\": \"$labels\", \"runs\": $RUNS_LEARN, \"wall_s\": $s}"
     # a few held-out sections and predictions come back for benchmarks/learnability_figure.py
-    args=("$store" --steps "$STEPS" --seed 0 --save-pred "$OUT/pred_$labels.npz")
+    # no bar: the device tool returns only the last 12,000 characters of the output
+    args=("$store" --steps "$STEPS" --seed 0 --save-pred "$OUT/pred_$labels.npz" --no-progress)
     [ "$labels" = new48 ] && args+=(--train-runs "$HALF")
     [ -n "$DEV" ] && args+=("$DEV")
     line=$(python benchmarks/learnability.py "${args[@]}" | tail -1)

@@ -59,6 +59,7 @@ def main(argv: list[str] | None = None) -> int:
                          "(a learning curve on one store: e.g. 64 against all 96 of 128 runs)")
     ap.add_argument("--save-pred", help="write held-out sections and predictions (.npz)")
     ap.add_argument("--save-n", type=int, default=4, help="held-out sections saved")
+    ap.add_argument("--no-progress", action="store_true", help="no training progress bar on stderr")
     args = ap.parse_args(argv)
 
     import torch
@@ -82,7 +83,8 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     model, info = train_unet(args.store, steps=steps, crop=args.crop, batch=args.batch,
                              base=base, lr=args.lr, seed=args.seed, threads=args.threads,
-                             device=args.device, split_fractions=fr, log=None, where=where)
+                             device=args.device, split_fractions=fr, log=None, where=where,
+                             progress=not args.no_progress)
     out: dict = {"benchmark": "learnability", "store": args.store, "steps": info["steps"],
                  "base": base, "crop": args.crop, "batch": args.batch, "seed": args.seed,
                  "device": info["device"], "train_seconds": info["seconds"],

@@ -44,8 +44,10 @@ def test_learnability_benchmark_prints_one_json_line(tmp_path, capsys):
     bench_main = runpy.run_path(str(BENCH))["main"]
     assert bench_main([str(store), "--steps", "2", "--crop", "16", "--batch", "4", "--base", "4",
                      "--threads", "1", "--test-fraction", "0.4", "--device", "cpu"]) == 0
-    line = capsys.readouterr().out.strip().splitlines()
+    captured = capsys.readouterr()
+    line = captured.out.strip().splitlines()
     assert len(line) == 1
+    assert "2/2" in captured.err and "step" in captured.err  # the training bar, on stderr
     out = json.loads(line[0])
     assert out["steps"] == 2 and out["device"] == "cpu"
     for split in ("train", "test"):
@@ -111,8 +113,10 @@ def test_learnability_benchmark_train_runs_subset_keeps_the_held_out_runs(tmp_pa
     assert bench_main(common) == 0
     full = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert full["train_runs"] >= 2, "the tiny store needs two train runs for this test"
-    assert bench_main(common + ["--train-runs", "1"]) == 0
-    sub = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert bench_main(common + ["--train-runs", "1", "--no-progress"]) == 0
+    captured = capsys.readouterr()
+    assert "step" not in captured.err  # --no-progress: no bar
+    sub = json.loads(captured.out.strip().splitlines()[-1])
     assert sub["train_runs_used"] == 1 and sub["train_runs"] == 1
     assert sub["test_runs"] == full["test_runs"] and sub["test_samples"] == full["test_samples"]
     with pytest.raises(SystemExit, match="train runs"):
