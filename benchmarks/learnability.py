@@ -20,10 +20,15 @@ Which labels the network misses: ``test_recall_by_slip_tol2`` is the held-out re
 without a slip value, e.g. the legacy strain band's, are left out), with the pixel counts.
 
 Comparing label sets: make stores that differ only in their labels with ``demseis relabel``
-(same seismic bytes), then run this on each with the same ``--seed`` and budget.
+(same seismic bytes), then run this on each with the same ``--seed`` and budget. Each run is
+then scored against its own labels. ``--reference REF`` scores against REF's labels instead
+(train threshold, held-out figures, recall by slip), training still on STORE's: a fixed truth
+for label sets that change what is counted as a fault (another ``min_slip_m``, a thicker
+mask). REF must hold the same samples with the same seismic bytes (a relabel of STORE, or
+STORE the relabel of REF); every scored sample is checked.
 
     PYTHONPATH=$PWD python benchmarks/learnability.py STORE [--steps N] [--seed 0]
-        [--train-runs N] [--save-pred PRED.npz]
+        [--train-runs N] [--save-pred PRED.npz] [--reference REF]
 
 ``--save-pred`` writes a few held-out sections (seismic, labels, predicted probabilities, the
 train-chosen thresholds) for ``benchmarks/learnability_figure.py``, which draws label sets side
@@ -59,6 +64,7 @@ def main(argv: list[str] | None = None) -> int:
                          "(a learning curve on one store: e.g. 64 against all 96 of 128 runs)")
     ap.add_argument("--save-pred", help="write held-out sections and predictions (.npz)")
     ap.add_argument("--save-n", type=int, default=4, help="held-out sections saved")
+    ap.add_argument("--reference", help="score against this relabelled store's labels")
     ap.add_argument("--no-progress", action="store_true", help="no training progress bar on stderr")
     args = ap.parse_args(argv)
 
@@ -94,18 +100,24 @@ def main(argv: list[str] | None = None) -> int:
         out["threads"] = args.threads
     rng = np.random.default_rng(args.seed)
     out["train_runs_used"] = None if where is None else len(where["run_id"])
+    truth_store = args.reference or args.store
+    if args.reference:
+        out["reference"] = args.reference
     for split in ("train", "test"):
         kw = dict(inputs=("seismic",), split=split, split_fractions=fr,
                   where=where if split == "train" else None)
-        ds = FaultSegDataset(args.store, targets=("fault",), **kw)
+        ds = FaultSegDataset(truth_store, targets=("fault",), **kw)
         with_slip = split == "test" and "slip_m" in ds.layout.arrays
         if with_slip:  # the held-out slip too, read with the same samples
-            ds = FaultSegDataset(args.store, targets=("fault", "slip_m"), **kw)
+            ds = FaultSegDataset(truth_store, targets=("fault", "slip_m"), **kw)
         idx = np.arange(len(ds))
         if split == "train" and len(ds) > args.max_train_eval:
             idx = np.sort(rng.choice(len(ds), args.max_train_eval, replace=False))
         pairs = [ds[int(i)] for i in idx]
         seis = np.stack([x[0].numpy() for x, _ in pairs])
+        if args.reference:
+            same_seismic(FaultSegDataset(args.store, targets=("fault",), **kw), ds, idx, seis,
+                         args.store, args.reference)
         fault = [y["fault"] if with_slip else y for _, y in pairs]
         truth = np.stack([(y.numpy() > 0) for y in fault])
         prob = predict_sections(model, seis, device=info["device"])
@@ -132,6 +144,19 @@ def main(argv: list[str] | None = None) -> int:
     out["seconds"] = round(time.perf_counter() - t0, 1)
     print(json.dumps(out))
     return 0
+
+
+def same_seismic(ds, ref_ds, idx: np.ndarray, ref_seis: np.ndarray, store: str, ref: str) -> None:
+    """Exit with a message unless ``ds`` (STORE) holds the samples ``idx`` of ``ref_ds`` (REF)
+    with the same run ids and seismic bytes (REF must be a relabel of STORE or the reverse)."""
+    if len(ds) != len(ref_ds) or not np.array_equal(ds.run_ids, ref_ds.run_ids):
+        raise SystemExit(f"--reference {ref}: its runs or samples differ from {store}'s; the "
+                         "reference must be the same store relabelled (demseis relabel)")
+    for j, i in enumerate(idx):
+        if not np.array_equal(ds[int(i)][0][0].numpy(), ref_seis[j]):
+            raise SystemExit(f"--reference {ref}: the seismic of sample {int(i)} differs from "
+                             f"{store}'s; the reference must be the same store relabelled "
+                             "(demseis relabel)")
 
 
 SLIP_BANDS_M = (10.0, 20.0, 40.0, 80.0, 160.0, np.inf)

@@ -159,6 +159,43 @@ def test_learnability_save_pred_and_figure(tmp_path, capsys):
         fig_main([str(pred), "--out", str(png)])
 
 
+def test_learnability_reference_scores_against_the_other_stores_labels(tmp_path, capsys):
+    """--reference REF: trained on STORE, scored against REF's labels of the same seismic; REF =
+    STORE gives the figures of a plain run; another seismic is refused."""
+    from scipy import ndimage
+
+    store, thick, other = tmp_path / "a.zarr", tmp_path / "b.zarr", tmp_path / "c.zarr"
+    _tiny_store(store)
+    _tiny_store(thick, fault_fn=lambda f: ndimage.binary_dilation(
+        f, structure=np.ones((1, 3, 3), bool)).astype(f.dtype))
+    _tiny_store(other, seismic_fn=lambda s: s + 1.0)
+    bench_main = runpy.run_path(str(BENCH))["main"]
+    common = [str(store), "--steps", "1", "--crop", "16", "--batch", "4", "--base", "4",
+              "--threads", "1", "--test-fraction", "0.4", "--device", "cpu", "--no-progress"]
+    assert bench_main(common) == 0
+    plain = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert bench_main(common + ["--reference", str(store)]) == 0
+    same = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    pred = tmp_path / "p.npz"
+    assert bench_main(common + ["--reference", str(thick), "--save-pred", str(pred)]) == 0
+    ref = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    keys = [k for k in plain if k.startswith(("train_", "test_")) and k != "train_seconds"]
+    assert {k: same[k] for k in keys} == {k: plain[k] for k in keys}
+    assert same["reference"] == str(store) and ref["reference"] == str(thick)
+    assert ref["final_loss"] == plain["final_loss"]  # the same training
+    from demseis.datasets import FaultSegDataset
+
+    ds = FaultSegDataset(thick, inputs=("seismic",), targets=("fault",), split="test",
+                         split_fractions=(0.6, 0.0, 0.4))
+    with np.load(pred) as z:
+        for i, s in enumerate(z["sample"]):  # the saved truth is the reference's labels
+            np.testing.assert_array_equal(z["truth"][i], ds[int(s)][1].numpy() > 0)
+    assert ref["test_recall_tol2"] != plain["test_recall_tol2"] or \
+        ref["test_precision_tol2"] != plain["test_precision_tol2"]
+    with pytest.raises(SystemExit, match="seismic of sample"):
+        bench_main(common + ["--reference", str(other)])
+
+
 def test_recall_by_slip_pools_to_the_scorers_recall():
     """The per-band recalls, weighted by their pixel counts, give the scorer's recall (every
     labelled pixel has a slip here), and a hand-made case gives the expected bands."""
