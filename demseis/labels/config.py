@@ -75,6 +75,11 @@ class LabelConfig:
     min_dip_deg : slip_trace: crest cells whose direction (fitted over 9 x 9 cells) dips less
         than this are not fault, in [0, 90]: bedding-parallel slip (flexural slip, slumping
         at the free surface) is not what the labels are for; 0 keeps every dip.
+    core_halfwidth_cells : slip_trace: the fault core (``damage`` class 2) is the fault mask
+        and the core of the shear band around each trace (its width at half maximum of the
+        finely smoothed shear, where the band is at least 5 cells wide), up to this many cells
+        either side, in [0, 10]; 0 = the fault mask alone. The ``fault`` mask is not changed:
+        a line learns better (docs/labels.md).
     damage_width_ratio : slip_trace: damage-zone total width as a multiple of the local slip,
         in [0, 100] (see docs/labels.md for the published data behind the default).
     damage_max_width_m : slip_trace: upper bound of the damage-zone total width (m), in [0, 1e5].
@@ -101,6 +106,7 @@ class LabelConfig:
     link_angle_deg: float = 35.0
     link_gap_cells: int = 0
     min_dip_deg: float = 15.0
+    core_halfwidth_cells: int = 5
     damage_width_ratio: float = 1.0
     damage_max_width_m: float = 200.0
 
@@ -140,6 +146,7 @@ class LabelConfig:
         _number("link_angle_deg", self.link_angle_deg, 0.0, 90.0)
         _integer("link_gap_cells", self.link_gap_cells, 0, 50)
         _number("min_dip_deg", self.min_dip_deg, 0.0, 90.0)
+        _integer("core_halfwidth_cells", self.core_halfwidth_cells, 0, 10)
         _number("damage_width_ratio", self.damage_width_ratio, 0.0, 100.0)
         _number("damage_max_width_m", self.damage_max_width_m, 0.0, 1e5)
         return self

@@ -15,6 +15,9 @@ labels are pixel-aligned with it:
    re-grown to the cells within t/2 of that centre line.
 4. damage = 0 background, 1 strain >= ``damage_threshold`` (small components dropped),
    2 fault core (the fault mask).
+
+Steps 2-4 are the legacy ``"strain_band"`` method; the default ``"slip_trace"`` method traces
+slip surfaces (:mod:`demseis.labels.traces`, targets by :func:`trace_targets`).
 """
 
 from __future__ import annotations
@@ -130,7 +133,11 @@ def trace_targets(traces, config: LabelConfig, cell_m: float,
     ``dip_deg`` and ``sense`` are those of the nearest trace cell, on mask cells. The damage
     zone (class 1) is the cells within half the local damage width of the trace, the width
     being ``min(damage_width_ratio * slip, damage_max_width_m)`` of the nearest trace cell;
-    class 2 is the fault mask.
+    class 2, the fault core, is the fault mask and the shear band's core around the traces
+    (``traces.core``: the band's width at half maximum, with ``core_halfwidth_cells`` > 0).
+    With a band core the damage zone is measured from the nearest cell of the trace and band
+    core instead of the trace (with the width of that cell's nearest trace cell), so that it
+    surrounds the fault core.
     """
     trace = np.asarray(traces.trace, dtype=bool)
     shape = trace.shape
@@ -144,12 +151,23 @@ def trace_targets(traces, config: LabelConfig, cell_m: float,
     fault = dist <= max(0.5 * float(config.thickness_cells), 0.5)
     slip_near = traces.slip_m[near_r, near_c].astype(np.float64)
     width_m = np.minimum(config.damage_width_ratio * slip_near, config.damage_max_width_m)
-    damage = dist <= 0.5 * width_m / float(cell_m)
+    band = getattr(traces, "core", None)
+    if band is None:
+        damage = dist <= 0.5 * width_m / float(cell_m)
+        core = fault.copy()
+    else:
+        # the damage zone surrounds the fault core: its half-width is measured from the
+        # nearest core cell, with the width of that cell's nearest trace cell
+        band = np.asarray(band, dtype=bool) | trace
+        dist_b, idx_b = ndimage.distance_transform_edt(~band, return_indices=True)
+        damage = dist_b <= 0.5 * width_m[idx_b[0], idx_b[1]] / float(cell_m)
+        core = fault | band
     if rock is not None:
         fault &= rock
+        core &= rock
         damage &= rock
     dmg = damage.astype(np.uint8)
-    dmg[fault] = 2
+    dmg[core] = 2
 
     def on_fault(a: np.ndarray, dtype) -> np.ndarray:
         return np.where(fault, a[near_r, near_c], 0).astype(dtype)

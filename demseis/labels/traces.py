@@ -31,6 +31,10 @@ method of :mod:`demseis.labels.maps`) turns such blobs into networks with loops 
    second of two crossing faults) start their own fault. Instance ids are 1.. by size.
 4. **Attributes.** Dip (degrees from horizontal, from the fitted direction), sense of slip (1
    normal: the upper block moved down the fault relative to the lower; 2 reverse), slip.
+5. **Fault core.** Around each trace, the shear band's width at half maximum of the shear
+   smoothed by CORE_SIGMA_CELLS, up to ``core_halfwidth_cells`` either side, where the band is
+   at least 5 cells wide (:func:`band_core`): ``damage`` class 2 in the targets. A sharp slip
+   surface's core is its trace; the ``fault`` mask stays the trace.
 
 All of it is on the grid of the seismic (row 0 at the top, square cells).
 """
@@ -69,6 +73,24 @@ STRAND_SPAN_CELLS = 11.0
 #: a strand lying mostly within this distance (cells) of a trace belongs to that fault's zone
 STRAND_ZONE_CELLS = 15.0
 
+#: Gaussian sigma (cells) of the displacement smoothing of the band-core field
+CORE_SIGMA_CELLS = 0.7
+
+#: the shortest core extent (cells, mean along the trace) on one side of a trace: a sharp
+#: step reaches 1, and 2-3 where its raster steps around a grain
+CORE_MIN_EXTENT_CELLS = 2.0
+
+#: rounding tolerance (cells) of the core's comparisons (a box mean of extents is not exact)
+_TOL = 1e-9
+
+#: holes of at most this many cells inside the core are core (the gaps between the strands
+#: of one band)
+CORE_HOLE_CELLS = 12
+
+#: a cell next to a trace is band core where its fine shear strain is at least this share of
+#: the crest's (half maximum: the band's full width at half maximum)
+CORE_FRACTION = 0.5
+
 
 @dataclass(frozen=True)
 class Traces:
@@ -83,6 +105,9 @@ class Traces:
     sense : uint8, 1 normal / 2 reverse on trace cells, 0 elsewhere.
     crest : bool, every crest cell before the slip test (for diagnostics).
     crest_slip_m : float32, slip measured on every crest cell (NaN where not measurable).
+    core : bool or None, the shear band's core around the traces (the trace cells and the
+        band's width at half maximum of the fine shear around them: :func:`band_core`);
+        None when ``core_halfwidth_cells`` is 0.
     """
 
     trace: np.ndarray
@@ -92,6 +117,7 @@ class Traces:
     sense: np.ndarray
     crest: np.ndarray
     crest_slip_m: np.ndarray
+    core: np.ndarray | None = None
 
     @property
     def n_faults(self) -> int:
@@ -549,6 +575,7 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
                             min_slip, cfg)
     crest_slip[crest] = slip[crest]
     strand = np.zeros(shape, dtype=bool)
+    fine = None
     if cfg.strand_sigma_cells > 0 and trace.any():
         # the other slip surfaces of a wide shear zone: crests of the finer field more than
         # STRAND_SEPARATION_CELLS from a trace (the trace's own crest is there too)
@@ -601,8 +628,101 @@ def slip_traces(strain: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray,
     slip_out = np.where(trace, slip, 0.0).astype(np.float32)
     dip_out = np.where(z, 0.0, dip).astype(np.float32)
     sense[z] = SENSE_NONE
+    core = None
+    if cfg.core_halfwidth_cells > 0:
+        if fine is None or cfg.strand_sigma_cells != CORE_SIGMA_CELLS:
+            fine = shear_field(disp_x_m, disp_y_m, rock, cell_m, CORE_SIGMA_CELLS, cohort)
+        core = band_core(trace, t_r, t_c, fine, solid, cohort, int(cfg.core_halfwidth_cells))
     return Traces(trace=trace, instance=inst, slip_m=slip_out, dip_deg=dip_out, sense=sense,
-                  crest=crest, crest_slip_m=crest_slip)
+                  crest=crest, crest_slip_m=crest_slip, core=core)
+
+
+def band_core(trace: np.ndarray, t_r: np.ndarray, t_c: np.ndarray, field: np.ndarray,
+              rock: np.ndarray, cohort: np.ndarray | None, max_halfwidth: int,
+              fraction: float = CORE_FRACTION, hole_cells: int = CORE_HOLE_CELLS) -> np.ndarray:
+    """The core of the shear band around the traces: the band's width at half maximum.
+
+    1. **Extent.** From every trace cell p, with unit tangent (t_r, t_c) and normal
+       n = (t_c, -t_r), the cells p + k n (k = 1..``max_halfwidth``, rounded to the nearest
+       cell) are read on either side while they are rock of p's cohort; the side's extent is
+       the largest such k where ``field`` is at least ``fraction`` of the crest value (the
+       largest of ``field`` at p and p +- n), 0 if none. A granular band slips on several
+       grain boundaries, so its shear dips between them: the extent is the band's outer
+       half-maximum, not its first dip.
+    2. **Along the trace.** Each side's extent is averaged over the trace cells in a
+       DIRECTION_WINDOW-square box (the extents of neighbouring cells differ by the grain
+       stepping); a mean below CORE_MIN_EXTENT_CELLS is 0.
+    3. **Cells.** A cell within ``max_halfwidth`` + 0.5 of a trace, rock of the cohort of its
+       nearest trace cell q, is core when its offset along q's normal lies within q's extent
+       on that side + 0.5 cell. Holes of at most ``hole_cells`` cells in the result are
+       filled (rock cells only): the gaps between the strands of one band.
+
+    A slip surface as sharp as the grid (``field`` a Gaussian of sigma ``CORE_SIGMA_CELLS``
+    across it) has a half-maximum one cell to one side (2-3 cells where its raster steps
+    around a grain), below CORE_MIN_EXTENT_CELLS along the trace: its core is the trace. A
+    band at least 5 cells wide keeps its width, up to 2 ``max_halfwidth`` + 1 cells.
+
+    Returns
+    -------
+    (nz, nx) bool: the trace cells and their core cells.
+    """
+    trace = np.asarray(trace, dtype=bool)
+    core = trace.copy()
+    if max_halfwidth <= 0 or not trace.any():
+        return core
+    nz, nx = trace.shape
+    rows, cols = np.nonzero(trace)
+    n_r, n_c = t_c[rows, cols], -t_r[rows, cols]
+    coh = np.zeros(trace.shape, np.int64) if cohort is None else np.asarray(cohort)
+
+    def at(k: float) -> tuple[np.ndarray, np.ndarray]:
+        r = np.clip(np.rint(rows + k * n_r).astype(np.int64), 0, nz - 1)
+        c = np.clip(np.rint(cols + k * n_c).astype(np.int64), 0, nx - 1)
+        return r, c
+
+    crest = field[rows, cols]
+    for k in (-1.0, 1.0):
+        crest = np.maximum(crest, field[at(k)])
+    level = fraction * crest
+    extent = {}
+    for side in (-1.0, 1.0):
+        alive = crest > 0
+        last = np.zeros(rows.size)
+        for k in range(1, int(max_halfwidth) + 1):
+            r, c = at(side * k)
+            alive &= rock[r, c] & (coh[r, c] == coh[rows, cols])
+            last = np.where(alive & (field[r, c] >= level), float(k), last)
+        on_trace = np.zeros(trace.shape)
+        on_trace[rows, cols] = last
+        mean = _along_trace_mean(trace, on_trace, trace, DIRECTION_WINDOW)
+        # a step as sharp as the grid is a half-maximum 1 cell wide on one side (the two
+        # cells of the step), and its raster follows the grains 1-2 cells either side of
+        # the surface: only a band wider than that along the trace has a core
+        extent[side] = np.where(mean >= CORE_MIN_EXTENT_CELLS - _TOL, mean, 0.0)
+    dist, idx = ndimage.distance_transform_edt(~trace, return_indices=True)
+    near = (dist > 0) & (dist <= max_halfwidth + 0.5) & rock
+    near &= coh == coh[idx[0], idx[1]]
+    r, c = np.nonzero(near)
+    qr, qc = idx[0][r, c], idx[1][r, c]
+    off = (r - qr) * t_c[qr, qc] - (c - qc) * t_r[qr, qc]
+    reach = np.where(off >= 0, extent[1.0][qr, qc], extent[-1.0][qr, qc])
+    keep = np.abs(off) <= reach + 0.5 + _TOL
+    core[r[keep], c[keep]] = True
+    return fill_small_holes(core, rock, hole_cells)
+
+
+def fill_small_holes(mask: np.ndarray, rock: np.ndarray, max_cells: int) -> np.ndarray:
+    """``mask`` with its holes (4-connected regions of non-mask cells enclosed by it) of at
+    most ``max_cells`` cells filled, on ``rock`` cells only."""
+    mask = np.asarray(mask, dtype=bool)
+    if max_cells <= 0 or not mask.any():
+        return mask.copy()
+    lab, n = ndimage.label(ndimage.binary_fill_holes(mask) & ~mask)
+    if not n:
+        return mask.copy()
+    small = np.bincount(lab.ravel(), minlength=n + 1) <= max_cells
+    small[0] = False
+    return mask | (small[lab] & np.asarray(rock, dtype=bool))
 
 
 def _slipping(crest: np.ndarray, disp_x_m: np.ndarray, disp_y_m: np.ndarray, rock: np.ndarray,
