@@ -2,7 +2,9 @@
 
 Coverage = share of the cells whose displacement jump (:func:`demseis.labels.coverage.jump_field`,
 from the particles, independent of the extraction) is >= 2 x min_slip_m that lie within 2
-cells of a fault label, pooled over the snapshots after the first of each run. Also per run:
+cells of a fault label, pooled over the snapshots after the first of each run: ``coverage``
+for the ``fault`` mask (the slip-surface lines), ``core_coverage`` for the fault core
+(``damage`` class 2: the fault mask and the shear band's core around it). Also per run:
 rungs (worst snapshot), loops, whether every labelled cell slips >= min_slip_m, the missed
 high-jump cells by their distance to the nearest label (cells), and the median
 ``label_maps`` time per snapshot (seed preset: the figure to compare).
@@ -114,7 +116,7 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
     snaps = _snapshots(preset, run, cache)
     hist = strain_history(snaps, lc)
     disp = displacement_history(snaps)
-    n_hi = n_near = loops = 0
+    n_hi = n_near = n_core = loops = 0
     rungs, times, slip_ok = [], [], True
     per_snap = []
     misses = dict.fromkeys(MISS_BANDS, 0)
@@ -129,6 +131,7 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
         hi, near = jump_coverage(f, jump, rock, min_slip, metric=metric)
         n_hi += hi
         n_near += near
+        n_core += jump_coverage(maps["damage"] == 2, jump, rock, min_slip, metric=metric)[1]
         per_snap.append(round(near / hi, 3) if hi else None)
         missed = (jump >= 2.0 * min_slip) & rock
         dist = _distance(f, metric)
@@ -139,6 +142,7 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
             loops += loop_count(f)
             slip_ok &= bool((maps["slip_m"][f] >= min_slip).all())
     return {"preset": preset, "run": run, "coverage": round(n_near / n_hi, 4) if n_hi else None,
+            "core_coverage": round(n_core / n_hi, 4) if n_hi else None,
             "n_high_jump_cells": n_hi, "per_snapshot": per_snap,
             "max_rungs": round(max(rungs), 4) if rungs else None, "loops": loops,
             "slip_floor_ok": slip_ok, "misses_by_distance": misses,
@@ -146,8 +150,9 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
 
 
 def ab_timing(preset: str, run: int, cache: str | None, repeats: int = 3) -> dict:
-    """label_maps seconds per snapshot (snapshots 1..), single traces vs strands interleaved
-    in one process so the two see the same machine load; medians and their ratio."""
+    """label_maps seconds per snapshot (snapshots 1..): single traces, strands without the
+    fault core, and the defaults (strands and core), interleaved in one process so they see
+    the same machine load; medians and their ratios."""
     import dataclasses
 
     from demseis.generator.config import load_config
@@ -157,8 +162,10 @@ def ab_timing(preset: str, run: int, cache: str | None, repeats: int = 3) -> dic
 
     cfg = load_config(None, preset=preset)
     grid = grid_of(cfg)
-    configs = {"single": dataclasses.replace(cfg.labels, strand_sigma_cells=0.0),
-               "strands": cfg.labels}
+    configs = {"single": dataclasses.replace(cfg.labels, strand_sigma_cells=0.0,
+                                             core_halfwidth_cells=0),
+               "strands": dataclasses.replace(cfg.labels, core_halfwidth_cells=0),
+               "core": cfg.labels}
     snaps = _snapshots(preset, run, cache)
     hist = strain_history(snaps, cfg.labels)
     disp = displacement_history(snaps)
@@ -172,11 +179,14 @@ def ab_timing(preset: str, run: int, cache: str | None, repeats: int = 3) -> dic
     med = {k: float(np.median(v)) for k, v in times.items()}
     return {"preset": preset, "run": run, "repeats": repeats,
             "single_s": round(med["single"], 3), "strands_s": round(med["strands"], 3),
-            "ratio": round(med["strands"] / med["single"], 2)}
+            "core_s": round(med["core"], 3),
+            "ratio": round(med["strands"] / med["single"], 2),
+            "core_ratio": round(med["core"] / med["strands"], 2)}
 
 
 def kinematic(metric: str = "euclidean") -> dict:
-    """Coverage of the labels and of the true plane on the planar kinematic faults."""
+    """Coverage of the labels (fault mask and fault core) and of the true plane on the planar
+    kinematic faults."""
     from demseis.labels import LabelConfig, label_maps, strain_history
     from demseis.labels.coverage import jump_coverage, jump_field
     from demseis.labels.traces import displacement_history
@@ -187,7 +197,7 @@ def kinematic(metric: str = "euclidean") -> dict:
     grid = Grid.covering(width, height, cell)
     zz, xx = np.meshgrid(grid.y_centres(), grid.x_centres(), indexing="ij")
     cfg = LabelConfig()
-    labels, plane = [], []
+    labels, cores, plane = [], [], []
     for seed in (1, 2):
         xy, r = disk_pack(width, height, np.random.default_rng(seed))
         n = xy.shape[0]
@@ -211,12 +221,15 @@ def kinematic(metric: str = "euclidean") -> dict:
                     trail = slip * np.cos(th) + 2 * cell
                     region = rock & (zz < height - slip * np.sin(th) - 2 * cell) & (zz > 5 * cell)
                     region &= (xx > trail) if side == "right" else (xx < width - trail)
-                    for out, f in ((labels, maps["fault"]), (plane, line)):
+                    for out, f in ((labels, maps["fault"]), (cores, maps["damage"] == 2),
+                                   (plane, line)):
                         hi, near = jump_coverage(f, jump, region, cfg.min_slip_for(cell),
                                                  metric=metric)
                         out.append(near / hi)
     return {"cases": len(labels), "labels_median": round(float(np.median(labels)), 3),
             "labels_min": round(float(np.min(labels)), 3),
+            "core_median": round(float(np.median(cores)), 3),
+            "core_min": round(float(np.min(cores)), 3),
             "true_plane_median": round(float(np.median(plane)), 3),
             "true_plane_min": round(float(np.min(plane)), 3),
             "true_plane_max": round(float(np.max(plane)), 3)}
@@ -232,7 +245,7 @@ def main() -> None:
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="change a [labels] key for the DEM runs (TOML value); repeatable")
     ap.add_argument("--ab-timing", action="store_true",
-                    help="also time label_maps single traces vs strands, interleaved")
+                    help="also time label_maps: single traces, strands, strands + core, interleaved")
     ap.add_argument("--kinematic", action="store_true",
                     help="also the planar kinematic faults (labels and true plane)")
     ap.add_argument("--metric", choices=("euclidean", "chessboard"), default="euclidean",
@@ -256,9 +269,10 @@ def main() -> None:
     by: dict = {}
     for r in out["runs"]:
         by.setdefault(r["preset"], []).append(r)
-    out["coverage"] = {p: round(sum(x["coverage"] * x["n_high_jump_cells"] for x in rs)
-                                / max(sum(x["n_high_jump_cells"] for x in rs), 1), 4)
-                       for p, rs in by.items()}
+    for key in ("coverage", "core_coverage"):
+        out[key] = {p: round(sum(x[key] * x["n_high_jump_cells"] for x in rs)
+                             / max(sum(x["n_high_jump_cells"] for x in rs), 1), 4)
+                    for p, rs in by.items()}
     if args.ab_timing:
         out["label_maps_ab"] = [ab_timing(r["preset"], r["run"], args.cache) for r in out["runs"]]
     if args.kinematic:

@@ -96,6 +96,10 @@ def main() -> None:
             "median_slip_m": _r(float(np.median(m["slip_m"][f]))) if f.any() else None,
             "rungs": _r(rung_fraction(f)), "loops": loop_count(f),
             "damage_share_of_rock": round(float(dz.sum()) / rock, 4),
+            "core_share_of_rock": round(float((m["damage"] == 2).sum()) / rock, 4),
+            # mean fault-core width: core area / trace length
+            "core_width_m": (_r(float((m["damage"] == 2).sum()) / length * grid.cell_m)
+                             if length else None),
             # mean damage-zone width: damage area / trace length
             "damage_width_m": _r(float(dz.sum()) / length * grid.cell_m) if length else None,
             "old_fault_cells": int(fo.sum()), "old_rungs": _r(rung_fraction(fo)),
@@ -129,11 +133,15 @@ def main() -> None:
     a.imshow(np.ma.masked_equal((m["damage"] == 1).astype(np.uint8), 0),
              cmap=ListedColormap(["#ffb000"]), alpha=0.35, extent=ext, aspect="equal",
              interpolation="nearest")
+    a.imshow(np.ma.masked_equal((m["damage"] == 2).astype(np.uint8), 0),
+             cmap=ListedColormap(["#7b2cbf"]), alpha=0.35, extent=ext, aspect="equal",
+             interpolation="nearest")
     fid = np.ma.masked_equal(m["fault_id"].astype(float), 0)
     a.imshow(fid, cmap="tab10", vmin=0.5, vmax=10.5, extent=ext, aspect="equal",
              interpolation="nearest")
     a.set_title(f"(b) slip-trace labels: {per_snap[-1]['n_faults']} faults (colour = id), "
-                f"damage zone (orange, width = slip, <= {cfg.damage_max_width_m:.0f} m)")
+                f"fault core (purple), damage zone\n(orange, width = slip, "
+                f"<= {cfg.damage_max_width_m:.0f} m, around the core)")
     a = ax[1, 0]
     seis(a)
     a.imshow(np.ma.masked_equal((mo["damage"] == 1).astype(np.uint8), 0),
