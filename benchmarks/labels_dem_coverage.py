@@ -247,7 +247,7 @@ def main() -> None:
     ap.add_argument("--ab-timing", action="store_true",
                     help="also time label_maps: single traces, strands, strands + core, interleaved")
     ap.add_argument("--kinematic", action="store_true",
-                    help="also the planar kinematic faults (labels and true plane)")
+                    help="also the planar kinematic faults (lines, fault core and true plane)")
     ap.add_argument("--metric", choices=("euclidean", "chessboard"), default="euclidean",
                     help="distance for 'within 2 cells of a label'")
     args = ap.parse_args()
