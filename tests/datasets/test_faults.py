@@ -4,6 +4,7 @@ byte-identical to an uninterrupted run."""
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import signal
@@ -86,14 +87,36 @@ def test_two_identical_commands_at_once(tmp_path, reference):
     assert not lock_path(out).exists()
 
 
+def _stop_once_locked(p: subprocess.Popen, out: Path, timeout_s: float = 120.0) -> None:
+    """SIGSTOP ``p`` as soon as the lock of ``out`` names it: a stopped writer is alive and
+    holds the lock, however fast its own work would have ended (with a fixed head start, a
+    fast machine finished the first writer before the second one looked)."""
+    t0 = time.perf_counter()
+    while True:
+        try:
+            holder = json.loads(lock_path(out).read_text())
+        except (FileNotFoundError, ValueError):
+            holder = None
+        if isinstance(holder, dict) and holder.get("pid") == p.pid:
+            os.kill(p.pid, signal.SIGSTOP)
+            return
+        assert p.poll() is None, p.communicate()
+        assert time.perf_counter() - t0 < timeout_s
+        time.sleep(0.001)
+
+
 def test_two_configs_at_once(tmp_path, reference):
     _, ref = reference
     out = tmp_path / "s.zarr"
     other = _config(tmp_path, seed=7)
     a = _generate(reference[0], out)
-    time.sleep(0.5)  # a takes the lock first (b would be refused the other way round too)
-    b = _generate(other, out)
-    (_, err_a), (_, err_b) = a.communicate(timeout=600), b.communicate(timeout=600)
+    _stop_once_locked(a, out)  # a holds the lock (b would be refused the other way round too)
+    try:
+        b = _generate(other, out)
+        _, err_b = b.communicate(timeout=600)
+    finally:
+        os.kill(a.pid, signal.SIGCONT)
+    _, err_a = a.communicate(timeout=600)
     assert a.returncode == 0, err_a
     assert b.returncode == 2 and "is being written by pid" in err_b, err_b
     assert digest(out) == digest(ref)

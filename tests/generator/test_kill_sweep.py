@@ -38,13 +38,28 @@ def _kill_a_worker(proc: subprocess.Popen, delay_s: float) -> bool:
     return False
 
 
+def _seconds(args: list[str]) -> float:
+    """Wall seconds of an uninterrupted ``demseis ARGS`` run, as the trials start it."""
+    t0 = time.perf_counter()
+    proc = spawn(args)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0, err[-2000:]
+    return time.perf_counter() - t0
+
+
 @pytest.mark.slow
 def test_kill9_worker_and_driver_at_random_moments(tmp_path):
+    """The kill moments are drawn within the measured length of an uninterrupted sweep of the
+    same kind (fixed delays landed after a fast machine's sweep had ended, and the test then
+    checked resumes of complete stores only)."""
     cfg = tmp_path / "c.toml"
     cfg.write_text("[sweep]\nn_runs = 4\n")
     ref = tmp_path / "ref.zarr"
     assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(ref), "--workers", "0",
                  "--quiet"]) == 0
+    seconds = {w: _seconds(["generate", str(cfg), "--preset", "tiny", "--out",
+                            str(tmp_path / f"len{w}.zarr"), "--workers", w, "--quiet"])
+               for w in ("0", "2")}
     rng = random.Random(14)
     outcomes = []
     for trial in range(N_TRIALS):
@@ -55,11 +70,12 @@ def test_kill9_worker_and_driver_at_random_moments(tmp_path):
                 "--quiet"]
         proc = spawn(args)
         if target == "worker":
-            hit = _kill_a_worker(proc, rng.uniform(0.0, 3.0))
+            # counted from the first worker's start, which comes after the cluster's
+            hit = _kill_a_worker(proc, rng.uniform(0.0, 0.5) * seconds["2"])
             _, err = proc.communicate(timeout=300)
             assert proc.returncode == 0, err[-2000:]  # the killed worker's task was retried
         else:
-            time.sleep(rng.uniform(0.3, 6.0 if workers == "2" else 3.0))
+            time.sleep(rng.uniform(0.05, 0.95) * seconds[workers])
             hit = proc.poll() is None
             try:
                 os.killpg(proc.pid, signal.SIGKILL)
