@@ -87,7 +87,7 @@ def main() -> None:
         old_all.append(mo)
         f, fo = m["fault"] > 0, mo["fault"] > 0
         rock = int((m["layer"] >= 0).sum())
-        dz = m["damage"] >= 1
+        dz, core = m["damage"] >= 1, m["damage"] == 2
         length = skeleton_length_cells(f)
         per_snap.append({
             "index": int(s.index), "throw_m": round(float(s.throw_m), 1),
@@ -96,10 +96,9 @@ def main() -> None:
             "median_slip_m": _r(float(np.median(m["slip_m"][f]))) if f.any() else None,
             "rungs": _r(rung_fraction(f)), "loops": loop_count(f),
             "damage_share_of_rock": round(float(dz.sum()) / rock, 4),
-            "core_share_of_rock": round(float((m["damage"] == 2).sum()) / rock, 4),
+            "core_share_of_rock": round(float(core.sum()) / rock, 4),
             # mean fault-core width: core area / trace length
-            "core_width_m": (_r(float((m["damage"] == 2).sum()) / length * grid.cell_m)
-                             if length else None),
+            "core_width_m": _r(float(core.sum()) / length * grid.cell_m) if length else None,
             # mean damage-zone width: damage area / trace length
             "damage_width_m": _r(float(dz.sum()) / length * grid.cell_m) if length else None,
             "old_fault_cells": int(fo.sum()), "old_rungs": _r(rung_fraction(fo)),

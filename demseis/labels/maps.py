@@ -151,14 +151,14 @@ def trace_targets(traces, config: LabelConfig, cell_m: float,
     fault = dist <= max(0.5 * float(config.thickness_cells), 0.5)
     slip_near = traces.slip_m[near_r, near_c].astype(np.float64)
     width_m = np.minimum(config.damage_width_ratio * slip_near, config.damage_max_width_m)
-    band = getattr(traces, "core", None)
+    band = traces.core
     if band is None:
         damage = dist <= 0.5 * width_m / float(cell_m)
         core = fault.copy()
     else:
         # the damage zone surrounds the fault core: its half-width is measured from the
         # nearest core cell, with the width of that cell's nearest trace cell
-        band = np.asarray(band, dtype=bool) | trace
+        band = np.asarray(band, dtype=bool)  # the trace cells and the band's core
         dist_b, idx_b = ndimage.distance_transform_edt(~band, return_indices=True)
         damage = dist_b <= 0.5 * width_m[idx_b[0], idx_b[1]] / float(cell_m)
         core = fault | band
