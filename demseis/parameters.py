@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from demseis.errors import ConfigError, DemseisError
+from demseis.registry import ENGINES, IMAGING, Registry
 
 INF = math.inf
 LEVELS = ("sweep", "run", "sample")
@@ -47,7 +48,9 @@ class Param:
     level : ``"sweep"``, ``"run"`` or ``"sample"`` (see the module docstring).
     default : the value used when the key is absent.
     lo, hi : numeric bounds (None = unbounded); ``hi = inf`` admits inf.
-    choices : allowed values of a ``str`` parameter.
+    choices : allowed values of a ``str`` parameter: a tuple, or a :class:`~demseis.registry.Registry`
+        whose names are the values (engines, imaging modes: a name registered later is valid).
+        A stored ``str`` parameter holds the index of its value among the choices.
     doc : one line for ``demseis params`` and the docs.
     unit : SI unit ("" for dimensionless).
     section : the config table that holds it (``sweep``, ``model``, ``grid``, ``output``).
@@ -63,7 +66,7 @@ class Param:
     default: Any
     lo: float | None = None
     hi: float | None = None
-    choices: tuple[str, ...] | None = None
+    choices: tuple[str, ...] | Registry | None = None
     doc: str = ""
     unit: str = ""
     section: str = "sweep"
@@ -164,7 +167,7 @@ def _fmt(x: float) -> str:
 
 def _p(name: str, kind: type, level: str, default: Any, lo: float | None = None,
        hi: float | None = None, *, unit: str = "", doc: str = "", section: str = "sweep",
-       choices: tuple[str, ...] | None = None, lo_open: bool = False,
+       choices: tuple[str, ...] | Registry | None = None, lo_open: bool = False,
        hi_open: bool = False, stage: tuple[float, float, bool, bool] | None = None) -> Param:
     """A declaration; ``stage`` = (lo, hi, lo_open, hi_open) of the wider stage domain."""
     st = stage if stage is not None else (None, None, False, False)
@@ -269,7 +272,7 @@ _DECLARED: tuple[Param, ...] = (
        doc="signal-to-noise ratio 20 log10(rms signal / rms noise); inf = no noise"),
     _p("noise_kind", str, "sample", "white", choices=("white", "band"),
        doc="white or band-limited (signal band) noise"),
-    _p("imaging", str, "sample", "1d", choices=("1d", "psf"),
+    _p("imaging", str, "sample", "1d", choices=IMAGING,
        doc="1-D convolution, or the 2-D dip-limited point-spread function (docs/seismic.md)"),
     _p("psf_max_angle_deg", float, "sample", 30.0, 1.0, 90.0, unit="deg",
        doc="maximum illumination angle of the PSF; 90 = no dip limit"),
@@ -284,10 +287,10 @@ _DECLARED: tuple[Param, ...] = (
        doc="smallest element radius (radii log-uniform in [min, max])"),
     _p("radius_max_m", float, "sweep", 25.0, 0.1, 1.0e3, unit="m", section="model",
        doc="largest element radius"),
-    _p("engine", str, "sweep", "dem", choices=("dem", "kinematic"), section="model",
+    _p("engine", str, "sweep", "dem", choices=ENGINES, section="model",
        doc="dem: grow faults in the DEM; kinematic: a FaultSeg-style generator (random "
            "layered reflectivity, optional folds, planar or listric faults displaced "
-           "geometrically; no particles, >= 20x faster; demseis.generator.kinematic)"),
+           "geometrically; no particles, >= 20x faster; demseis.generator.engines.kinematic)"),
     _p("n_snapshots", int, "sweep", 4, 2, 1000, section="model",
        doc="snapshots per run, equally spaced in throw; the first is the undeformed reference"),
     _p("sedimentation", bool, "sweep", True, section="model",

@@ -11,25 +11,22 @@ from typing import Any
 
 import numpy as np
 
-from demseis.types import Snapshot
+from demseis.datasets import open_store, read_particles, read_sample, shard_status
 from demseis.errors import ConfigError, InputError
 from demseis.generator.config import PRESETS, Config, load_config, parse_config
-from demseis.generator.pipeline import (
-    require_particles,
-    grid_of,
-    property_model_of,
-    run_info,
-    run_properties,
-    simulate_run,
-)
+from demseis.generator.engines import get_engine, require_particles
+from demseis.generator.layout import grid_of
+from demseis.generator.runsetup import property_model_of, run_properties
 from demseis.generator.sampling import plan_run
+from demseis.labels import displacement_history, label_maps, strain_history
+from demseis.seismic import (element_properties, imaging_mode, property_grids, rasterise,
+                             synthetic_sections)
+from demseis.types import Snapshot
 
 
-def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot], dict[str, Any]]:
+def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot]]:
     path = Path(source)
     if path.is_dir():
-        from demseis.datasets import open_store, read_particles, shard_status
-
         root = open_store(path)
         cfg = parse_config(dict(root.attrs)["config"], source=str(path))
         require_particles(cfg, "preview")
@@ -37,10 +34,7 @@ def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot], dict[st
             raise InputError(f"--run {run}: the store has runs 0..{cfg.sweep.n_runs - 1}")
         if shard_status(path)[run] != 1:
             raise InputError(f"--run {run} is not done in store {source!r}")
-        snaps = read_particles(path, run)
-        p = plan_run(cfg, run).params
-        info = run_info(cfg, p, run)
-        return cfg, snaps, info
+        return cfg, read_particles(path, run)
     if source in PRESETS:
         cfg = load_config(preset=source)
     elif path.is_file():
@@ -50,8 +44,7 @@ def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot], dict[st
     if run >= cfg.sweep.n_runs:
         raise InputError(f"--run {run}: the config has runs 0..{cfg.sweep.n_runs - 1}")
     require_particles(cfg, "preview")
-    snaps, info = simulate_run(cfg, plan_run(cfg, run))
-    return cfg, snaps, info
+    return cfg, list(get_engine(cfg.model.engine).simulate(cfg, plan_run(cfg, run)).snapshots)
 
 
 def _draw_particles(ax: Any, snap: Snapshot, colors: np.ndarray, *, alpha_deposited: float = 0.45,
@@ -92,15 +85,7 @@ def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from demseis.labels import label_maps, strain_history
-    from demseis.seismic import (
-        element_properties,
-        property_grids,
-        rasterise,
-        synthetic_sections,
-    )
-
-    cfg, snaps, info = _load_source(source, run)
+    cfg, snaps = _load_source(source, run)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     spec = plan_run(cfg, run)
@@ -163,8 +148,6 @@ def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
     sec = synthetic_sections(vp_g, rho_g, grid.cell_m, [fmax])[0]
     clip = float(np.percentile(np.abs(sec), 99)) or 1.0
     hist = strain_history(snaps, cfg.labels)
-    from demseis.labels.traces import displacement_history
-
     maps = label_maps(last, hist[-1], grid, cfg.labels, displacement=displacement_history(snaps)[-1])
     fig, axes = plt.subplots(1, 3, figsize=(18, 3.4))
     axes[0].imshow(sec, extent=extent, cmap="seismic", vmin=-clip, vmax=clip, aspect="equal")
@@ -210,8 +193,6 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from demseis.datasets import open_store, read_sample
-
     root = open_store(store)
     n = root["seismic"].shape[0]
     if not 0 <= index < n:
@@ -222,9 +203,7 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     sec, fault, damage = (sample.arrays[k] for k in ("seismic", "fault", "damage"))
     p = sample.params
     noise = p["noise_kind"]
-    imaging = ""
-    if "imaging" in p:       # stores written before the PSF option have only 1-D
-        imaging = ", 1-D" if p["imaging"] == "1d" else f", PSF {float(p['psf_max_angle_deg']):g}°"
+    imaging = f", {imaging_mode(p['imaging']).title(p)}" if "imaging" in p else ""
     w_m = grid["nx"] * grid["cell_m"]
     h_m = grid["nz"] * grid["cell_m"]
     extent = (0, w_m / 1000, h_m / 1000, 0)

@@ -78,10 +78,10 @@ def main() -> None:
         (f"PSF, max angle {ang:g}°", "psf", ang) for ang in a.angles]
     fig, axes = plt.subplots(2, 3, figsize=(14, 6.4),
                              gridspec_kw={"height_ratios": [grid.nz / grid.nx * 3.0, 1.2]})
-    sec = [imaged_sections(kind, vp_g, rho_g, grid.cell_m, [a.freq], max_angle_deg=ang)[0]
+    sec = [imaged_sections(kind, vp_g, rho_g, grid.cell_m, [a.freq], psf_max_angle_deg=ang)[0]
            for _, kind, ang in cases]
     c0 = (n - show) // 2
-    pt = [imaged_sections(kind, vp_p, rho_p, a.cell_m, [a.freq], max_angle_deg=ang)[0]
+    pt = [imaged_sections(kind, vp_p, rho_p, a.cell_m, [a.freq], psf_max_angle_deg=ang)[0]
           [c0:c0 + show, c0:c0 + show] for _, kind, ang in cases]
     clip = float(np.percentile(np.abs(sec[0]), 99.5))
     clip_p = float(np.abs(pt[0]).max())

@@ -1,9 +1,10 @@
-"""The import graph of the package runs one way, and nothing imports ``tests``.
+"""The import graph of the package runs one way, has no cycles, and nothing imports ``tests``.
 
 cli -> plotting / bench / api -> generator -> evaluation -> datasets -> dem | seismic | labels
--> types / parameters / testing -> errors. A stage (dem, seismic, labels) never imports
-``datasets`` and reaches another stage only through its package (``from demseis.seismic import
-rasterise``), never its modules. Every import counts, including those inside functions.
+-> testing -> types / parameters / schema -> registry -> errors. A stage (dem, seismic, labels)
+never imports ``datasets`` and reaches another stage only through its package (``from
+demseis.seismic import rasterise``), never its modules. No module imports, even indirectly, a
+module that imports it. Every import counts, including those inside functions.
 """
 
 from __future__ import annotations
@@ -19,14 +20,15 @@ STAGES = ("dem", "seismic", "labels")
 #: rank (equal only within the same part)
 RANK = {
     "errors": 0,
-    "types": 1, "parameters": 1,
-    "testing": 2,
-    "dem": 3, "seismic": 3, "labels": 3,
-    "datasets": 4,
-    "evaluation": 5,
-    "generator": 6,
-    "api": 7, "plotting": 7, "bench": 7,
-    "cli": 8, "__main__": 9,
+    "registry": 1,
+    "types": 2, "parameters": 2, "schema": 2,
+    "testing": 3,
+    "dem": 4, "seismic": 4, "labels": 4,
+    "datasets": 5,
+    "evaluation": 6,
+    "generator": 7,
+    "api": 8, "plotting": 8, "bench": 8,
+    "cli": 9, "__main__": 10,
 }
 #: names of the root package any module may import (the root module imports nothing heavy)
 ROOT_NAMES = {"__version__", "DemseisError"}
@@ -137,3 +139,112 @@ def test_checker_catches_a_backward_import(tmp_path, monkeypatch):
         assert "imports demseis.datasets" in str(exc) and "internal of stage labels" in str(exc)
     else:
         raise AssertionError("a seismic -> datasets import passed the check")
+
+
+def _module_name(path: Path, root: Path) -> str:
+    rel = path.relative_to(root).with_suffix("")
+    parts = list(rel.parts[:-1]) if rel.name == "__init__" else list(rel.parts)
+    return ".".join(parts)
+
+
+def import_graph(root: Path = ROOT) -> dict[str, set[str]]:
+    """module -> the demseis modules it imports (``from pkg import sub`` counts as importing
+    ``pkg.sub`` when ``sub`` is a module, else as importing ``pkg``)."""
+    files = sorted(p for p in (root / "demseis").rglob("*.py") if "__pycache__" not in p.parts)
+    modules = {_module_name(p, root) for p in files}
+    graph: dict[str, set[str]] = {}
+    for path in files:
+        me = _module_name(path, root)
+        edges = graph.setdefault(me, set())
+        found = _imports_in(path, root)
+        if me == "demseis":
+            # the front door loads demseis.api on first attribute access, not at import
+            # (test_root_imports_lazily): only its module-level imports are imports
+            found = _imports_in(path, root, top_level_only=True)
+        for mod, names, _ in found:
+            if mod not in modules:
+                continue
+            subs = [f"{mod}.{n}" for n in names if f"{mod}.{n}" in modules]
+            edges.update(subs or [mod])
+            if len(subs) < len(names):
+                edges.add(mod)
+        edges.discard(me)
+    return graph
+
+
+def _imports_in(path: Path, root: Path,
+                top_level_only: bool = False) -> list[tuple[str, list[str], int]]:
+    rel = path.relative_to(root).with_suffix("")
+    pkg_parts = list(rel.parts[:-1])
+    out = []
+    tree = ast.parse(path.read_text(), str(path))
+    for node in (tree.body if top_level_only else ast.walk(tree)):
+        if isinstance(node, ast.Import):
+            out += [(a.name, [], node.lineno) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = pkg_parts[: len(pkg_parts) - node.level + 1]
+                mod = ".".join(base + ([node.module] if node.module else []))
+            else:
+                mod = node.module or ""
+            out.append((mod, [a.name for a in node.names], node.lineno))
+    return out
+
+
+def import_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_cycles():
+    cycles = import_cycles(import_graph())
+    assert not cycles, "import cycles between demseis modules (imports inside functions " \
+        "count):\n" + "\n".join(" <-> ".join(c) for c in cycles)
+
+
+def test_cycle_checker_finds_a_hidden_cycle(tmp_path):
+    """A cycle hidden by a function-local import, through a package's __init__, is found."""
+    pkg = tmp_path / "demseis"
+    (pkg / "labels").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "errors.py").write_text("")
+    (pkg / "labels" / "__init__.py").write_text("from demseis.labels.maps import f\n")
+    (pkg / "labels" / "maps.py").write_text("import numpy\nfrom demseis import errors\n"
+                                             "def f():\n    from demseis.labels.traces import g\n")
+    (pkg / "labels" / "traces.py").write_text("from demseis.labels import f\n")
+    graph = import_graph(tmp_path)
+    assert graph["demseis.labels.maps"] == {"demseis.errors", "demseis.labels.traces"}
+    assert import_cycles(graph) == [["demseis.labels", "demseis.labels.maps",
+                                     "demseis.labels.traces"]]
+    (pkg / "labels" / "traces.py").write_text("from demseis import errors\n")
+    assert import_cycles(import_graph(tmp_path)) == []

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from demseis.cli import nonneg_int
+from demseis.cli._args import nonneg_int
 from demseis.errors import InputError
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from demseis.cli import nonneg_int
+from demseis.cli._args import nonneg_int
 
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:

@@ -41,6 +41,7 @@ from demseis.generator.params import (
     spec_values_hint,
 )
 from demseis.parameters import PARAMS, PROPERTY_FIELDS, SCENARIO, Param
+from demseis.registry import ENGINES
 
 PRESETS = ("tiny", "quick", "seed", "variety")
 
@@ -302,17 +303,6 @@ def _cross_checks(cfg: Config) -> None:
             f"sweep.throw_m up to {throw[1]:g} m is too large for model.height_m = "
             f"{cfg.model.height_m:g}: at most 0.6 * height_m = {0.6 * cfg.model.height_m:g} m"
         )
-    if cfg.model.radius_max_m * 8 > min(cfg.model.width_m, cfg.model.height_m):
-        raise ConfigError(
-            f"model.radius_max_m = {cfg.model.radius_max_m:g} is too large for a "
-            f"{cfg.model.width_m:g} x {cfg.model.height_m:g} m box: at most 1/8 of the smaller side"
-        )
-    n_layers = spec_values_hint(cfg.sweep.params["n_layers"])
-    if n_layers and cfg.model.height_m / n_layers[1] < 2 * cfg.model.radius_min_m:
-        raise ConfigError(
-            f"sweep.n_layers up to {n_layers[1]} gives layers thinner than one element "
-            f"(height_m / n_layers < 2 * radius_min_m = {2 * cfg.model.radius_min_m:g} m)"
-        )
     if cfg.grid.cell_m * 4 > min(cfg.model.width_m, cfg.model.height_m):
         raise ConfigError(f"grid.cell_m = {cfg.grid.cell_m:g} is too coarse for the model box")
     # every extreme value of every property parameter must make a valid PropertyModel
@@ -324,9 +314,8 @@ def _cross_checks(cfg: Config) -> None:
                 PropertyModel(**{**cfg.properties, key: value}).validate()
             except ConfigError as exc:
                 raise ConfigError(f"sweep.{key}: {exc}") from None
-    from demseis.generator.physics import check_physics
-
-    check_physics(cfg)  # cross-parameter physics: a fault can form, the run is quasi-static
+    # the engine's own rules (the DEM's: elements fit, a fault can form, quasi-static)
+    ENGINES.get(cfg.model.engine).check(cfg)
 
 
 def _spec_candidates(spec: Spec) -> tuple:

@@ -10,7 +10,8 @@ import numpy as np
 
 from demseis.errors import StoreError
 from demseis.generator.config import Config, parse_config
-from demseis.generator.pipeline import render_run, require_particles, run_info
+from demseis.generator.engines import get_engine, require_particles, run_from_particles
+from demseis.generator.render import render_run
 from demseis.generator.sampling import plan_run
 from demseis.generator.sweep import SweepSummary, _progress_bar, prepare_store
 
@@ -125,11 +126,8 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
             if src_status[run] != 1:
                 summary.failed[run] = "not done in the source store"
                 continue
-            spec = plan_run(cfg, run)
-            snaps = read_particles(src, run)
-            p = spec.params
-            info = run_info(cfg, p, run)
-            data = render_run(cfg, spec, snaps, info)
+            result = run_from_particles(cfg, plan_run(cfg, run), read_particles(src, run))
+            data = render_run(cfg, result, get_engine(cfg.model.engine))
             write_shard(out, run, data.arrays, data.params, data.snapshots)
             summary.completed.append(run)
             bar.update(cfg.samples_per_run)

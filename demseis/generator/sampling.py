@@ -43,19 +43,44 @@ def rng_at(cfg: Config, *key: int) -> np.random.Generator:
     return np.random.default_rng(seed_sequence(cfg, *key))
 
 
+#: the sample-level parameters, in declaration order: the order in which a render draws them
+#: (a parameter declared later draws after the others, so older configs keep their values)
+SAMPLE_KEYS: tuple[str, ...] = tuple(k for k, p in SCENARIO.items() if p.level == "sample")
+
+
 @dataclass(frozen=True)
 class Render:
-    """One rendered sample of a snapshot."""
+    """One rendered sample of a snapshot.
 
-    sample: int  # index within the run
+    Attributes
+    ----------
+    sample : index within the run.
+    snapshot : the snapshot it renders.
+    seed : 64-bit seed of the noise Generator.
+    values : every sample-level parameter (:data:`SAMPLE_KEYS`: ``freq_hz``, ``snr_db``,
+        ``noise_kind``, ``imaging`` and the imaging modes' options).
+    """
+
+    sample: int
     snapshot: int
-    freq_hz: float
-    snr_db: float
-    noise_kind: str
-    seed: int  # 64-bit seed of the noise Generator
-    imaging: str = "1d"  # "1d" or "psf" (demseis.seismic.psf)
-    psf_max_angle_deg: float = 30.0
-    psf_aperture_m: float = 0.0  # 0 = no aperture limit
+    seed: int
+    values: dict[str, Any]
+
+    @property
+    def freq_hz(self) -> float:
+        return float(self.values["freq_hz"])
+
+    @property
+    def snr_db(self) -> float:
+        return float(self.values["snr_db"])
+
+    @property
+    def noise_kind(self) -> str:
+        return str(self.values["noise_kind"])
+
+    @property
+    def imaging(self) -> str:
+        return str(self.values["imaging"])
 
 
 @dataclass(frozen=True)
@@ -100,24 +125,18 @@ def plan_run(cfg: Config, run: int) -> RunSpec:
                 ss = seed_sequence(cfg, run, SEED_RENDER, sample)
                 rng = np.random.default_rng(ss)
                 vals = {}
-                # drawn in this order; keys added later come last so that older configs
-                # draw the same values
-                for key in ("freq_hz", "snr_db", "noise_kind", "imaging", "psf_max_angle_deg",
-                            "psf_aperture_m"):
+                for key in SAMPLE_KEYS:
                     spec = combo[key]
                     if isinstance(spec, Fixed):
-                        vals[key] = spec.value
+                        value = spec.value
                     elif isinstance(spec, DistSpec):
-                        vals[key] = spec.sample(rng)
+                        value = spec.sample(rng)
                     elif isinstance(spec, GridSpec):  # pragma: no cover - crossed away
                         raise AssertionError(key)
                     else:
-                        vals[key] = spec
+                        value = spec
+                    vals[key] = SCENARIO[key].kind(value)
                 noise_seed = int(ss.generate_state(2, dtype=np.uint64)[1])
-                renders.append(Render(sample=sample, snapshot=snap, freq_hz=float(vals["freq_hz"]),
-                                      snr_db=float(vals["snr_db"]), noise_kind=str(vals["noise_kind"]),
-                                      seed=noise_seed, imaging=str(vals["imaging"]),
-                                      psf_max_angle_deg=float(vals["psf_max_angle_deg"]),
-                                      psf_aperture_m=float(vals["psf_aperture_m"])))
+                renders.append(Render(sample=sample, snapshot=snap, seed=noise_seed, values=vals))
                 sample += 1
     return RunSpec(run=run, params=run_params(cfg, run), renders=tuple(renders))

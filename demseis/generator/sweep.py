@@ -11,7 +11,6 @@ from __future__ import annotations
 import contextlib
 import json
 import logging
-import math
 import os
 import sys
 import time
@@ -23,14 +22,10 @@ import numpy as np
 
 from demseis.errors import ConfigError, InputError, SimulationError, StoreError
 from demseis.generator.config import Config, parse_config
-from demseis.generator.pipeline import (
-    PARAM_CODES,
-    array_dtypes,
-    grid_of,
-    param_dtypes,
-    run_shard,
-    sample_shape,
-)
+from demseis.generator.engines import get_engine
+from demseis.generator.layout import array_dtypes, grid_of, param_codes, param_dtypes, sample_shape
+from demseis.generator.pipeline import run_shard
+from demseis.generator.sampling import run_params
 from demseis.generator.workers import (
     set_worker_env,
     sigint_ignored,
@@ -38,11 +33,6 @@ from demseis.generator.workers import (
     worker_start_method,
 )
 
-#: ``--dry-run`` cost model, fitted to the seed-scale run measured by benchmarks/dem_seed.py
-#: (11,224 elements: 25.8 s faulting for ~45,900 steps, 15.7 s settling, one core)
-DRY_RUN_ELEMENT_STEPS_PER_S = 2.0e7
-DRY_RUN_SETTLE_S_PER_ELEMENT = 1.4e-3
-DRY_RUN_PACKING = 0.86
 
 
 @dataclass
@@ -63,7 +53,7 @@ class SweepSummary:
     #: wall seconds of the driver's phases: prepare (store), start (cluster + Numba warm-up,
     #: overlapped), compute, close (cluster shutdown), finalize (failures + consolidation)
     phase_seconds: dict[str, float] = field(default_factory=dict)
-    #: one record per finished task: shard, pid, start/end (epoch s), dem_s, render_s, write_s,
+    #: one record per finished task: shard, pid, start/end (epoch s), engine_s, render_s, write_s,
     #: cpu_s (CPU seconds of the task's thread)
     tasks: list[dict[str, Any]] = field(default_factory=list)
 
@@ -107,7 +97,7 @@ def store_attrs(cfg: Config) -> dict[str, Any]:
     return {
         "config": cfg.to_dict(),
         "grid": grid_attrs,
-        "param_codes": {k: list(v) for k, v in PARAM_CODES.items()},
+        "param_codes": {k: list(v) for k, v in param_codes().items()},
     }
 
 
@@ -196,8 +186,9 @@ def store_param_specs() -> dict[str, Any]:
 
     decl = {k: (p.unit, p.doc) for k, p in SCENARIO.items()}
     decl.update({p.name: (p.unit, p.doc) for p in STORED})  # throw_m: the throw reached
+    codes = param_codes()
     return {k: ParamSpec(v, long_name=decl[k][1], units=decl[k][0] or "1",
-                         categories=PARAM_CODES.get(k))
+                         categories=codes.get(k))
             for k, v in param_dtypes().items()}
 
 
@@ -228,7 +219,7 @@ def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, An
     last = snapshot == snapshot.max()
     return {"shard": shard, "seconds": t3 - t0, "samples": int(data.arrays["seismic"].shape[0]),
             "no_fault": not bool(np.any(data.arrays["fault"][last])), "pid": os.getpid(),
-            "start": start, "end": time.time(), "dem_s": timings.get("dem_s", 0.0),
+            "start": start, "end": time.time(), "engine_s": timings.get("engine_s", 0.0),
             "render_s": timings.get("render_s", 0.0), "write_s": t3 - t2,
             "cpu_s": time.thread_time() - c0}
 
@@ -239,34 +230,19 @@ def warm_numba_cache() -> None:
     Workers then load the cached machine code instead of each compiling it again.
     """
     from demseis.generator.config import load_config
-    from demseis.generator.pipeline import render_run, simulate_run
-    from demseis.generator.sampling import plan_run
 
     raw_cfg = load_config(preset="tiny").to_dict()
+    raw_cfg["model"]["engine"] = "dem"
     raw_cfg["sweep"].update(n_runs=1, n_layers=2, throw_m=20.0, dip_deg=60.0)
     # 1 m/s: the run outlasts one damping relaxation time (demseis.generator.physics)
     raw_cfg["model"].update(n_snapshots=2, width_m=300.0, height_m=200.0, wall_speed_m_s=1.0)
-    cfg = parse_config(raw_cfg)
-    spec = plan_run(cfg, 0)
-    snaps, info = simulate_run(cfg, spec)
-    render_run(cfg, spec, snaps, info)
+    run_shard(parse_config(raw_cfg), 0)
 
 
 def run_cost(cfg: Config, run: int) -> float:
-    """Relative cost of DEM run ``run``: integrator steps to the target throw plus settling.
-
-    Steps = path along dip / wall speed / dt, with the DEM's own time step
-    (:func:`demseis.dem.time_step`); the element count is the same for every run of a sweep.
-    Used to start the longest runs first.
-    """
-    from demseis.dem import time_step
-    from demseis.generator.sampling import run_params
-
-    p = run_params(cfg, run)
-    m = cfg.model
-    dt = time_step(m.radius_min_m, p["density_kg_m3"], p["kn_n_m"])
-    path_m = p["throw_m"] / math.sin(math.radians(p["dip_deg"]))
-    return (path_m / m.wall_speed_m_s + 4.0) / dt
+    """Relative cost of run ``run`` by its engine (:meth:`Engine.cost`); the sweep starts the
+    costliest runs first."""
+    return get_engine(cfg.model.engine).cost(cfg, run_params(cfg, run))
 
 
 def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
@@ -276,32 +252,16 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
     n_runs = cfg.sweep.n_runs if pending is None else pending
     h, w = sample_shape(cfg)
     bytes_per_sample = sum(np.dtype(d).itemsize for d in array_dtypes(cfg).values()) * h * w
-    m = cfg.model
-    # radii are log-uniform (demseis.dem.assembly): E[r^2] = (b^2 - a^2) / (2 ln(b / a))
-    a, b = m.radius_min_m, m.radius_max_m
-    mean_r2 = a * a if b <= a else (b * b - a * a) / (2.0 * math.log(b / a))
-    n_elem = DRY_RUN_PACKING * m.width_m * m.height_m / (math.pi * mean_r2)
-    from demseis.generator.params import spec_values_hint
-
-    throw_hi = spec_values_hint(cfg.sweep.params["throw_m"])[1]
-    dip_lo = spec_values_hint(cfg.sweep.params["dip_deg"])[0]
-    kn_lo = spec_values_hint(cfg.sweep.params["kn_n_m"])[0]
-    rho_hi = spec_values_hint(cfg.sweep.params["density_kg_m3"])[1]
-    from demseis.dem import time_step
-
-    dt = time_step(a, rho_hi, kn_lo)
-    path_m = throw_hi / math.sin(math.radians(dip_lo))
-    steps = path_m / m.wall_speed_m_s / dt
-    secs = n_elem * (steps / DRY_RUN_ELEMENT_STEPS_PER_S + DRY_RUN_SETTLE_S_PER_ELEMENT)
+    what, secs = get_engine(cfg.model.engine).describe(cfg)
     return [
         f"config: {cfg.name} (seed {cfg.sweep.seed})",
-        f"DEM runs: {n_runs} to compute (of {cfg.sweep.n_runs}); ~{n_elem:,.0f} elements each",
+        f"{cfg.model.engine} runs: {n_runs} to compute (of {cfg.sweep.n_runs}); {what}",
         f"samples: {n_runs * S} ({cfg.model.n_snapshots} snapshots x "
         f"{cfg.renders_per_run_snapshot} renders per run)",
         f"sample shape: {h} x {w} ({cfg.output.domain} domain; {grid.cell_m:g} m cells); arrays: "
         + ", ".join(f"{k} {v}" for k, v in array_dtypes(cfg).items()),
-        f"size on disk: at most {n_runs * S * bytes_per_sample / 2**20:,.1f} MiB (uncompressed) "
-        "plus particle snapshots",
+        f"size on disk: at most {n_runs * S * bytes_per_sample / 2**20:,.1f} MiB (uncompressed)"
+        + (" plus particle snapshots" if get_engine(cfg.model.engine).particles else ""),
         f"estimated time: up to ~{secs * n_runs / 60:,.1f} core-minutes "
         f"(~{secs:,.0f} s per run on one core at most; divide by the worker count for wall time)",
     ]

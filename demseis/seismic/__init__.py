@@ -31,7 +31,8 @@ from demseis.seismic.properties import (
     property_grids,
     smooth,
 )
-from demseis.seismic.psf import IMAGING, imaged_sections, psf_sections
+from demseis.seismic.imaging import ImagingMode, imaged_sections, imaging_mode
+from demseis.seismic.psf import psf_sections
 from demseis.seismic.raster import rasterise
 from demseis.seismic.wavelet import ricker
 
@@ -39,5 +40,5 @@ __all__ = [
     "rasterise", "ricker", "reflectivity", "impedance", "convolve", "PropertyModel",
     "LayerProperties", "draw_layer_properties", "element_properties", "property_grids", "smooth",
     "synthetic_sections", "interface_times", "time_axis", "depth_to_time", "add_noise", "rms",
-    "snr_db", "psf_sections", "imaged_sections", "IMAGING",
+    "snr_db", "psf_sections", "imaged_sections", "ImagingMode", "imaging_mode",
 ]

@@ -83,9 +83,6 @@ from demseis.seismic import _kernels
 from demseis.seismic.forward import _check_grids, interface_times, synthetic_sections
 from demseis.seismic.wavelet import _check_freqs, ricker_half_width_s
 
-IMAGING = ("1d", "psf")
-"""Imaging options of a rendered sample: the 1-D convolution or the 2-D PSF."""
-
 DEFAULT_TAPER_DEG = 5.0
 """Width of the raised-cosine edge of the dip mask (degrees), inside the maximum angle."""
 
@@ -396,16 +393,3 @@ def psf_sections(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
     if max_angle_deg >= 90.0:
         return sections
     return dip_filter(sections, plan)
-
-
-def imaged_sections(imaging: str, vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
-                    freqs_hz: float | Sequence[float], domain: str = "depth", *,
-                    t_s: np.ndarray | None = None, max_angle_deg: float = 30.0,
-                    aperture_m: float = math.inf) -> np.ndarray:
-    """Sections by the named imaging: ``"1d"`` (``synthetic_sections``) or ``"psf"``."""
-    if imaging == "1d":
-        return synthetic_sections(vp_g, rho_g, cell_m, freqs_hz, domain, t_s=t_s)
-    if imaging == "psf":
-        return psf_sections(vp_g, rho_g, cell_m, freqs_hz, max_angle_deg, domain, t_s=t_s,
-                            aperture_m=aperture_m)
-    raise InputError(f"imaging must be one of {', '.join(map(repr, IMAGING))}, got {imaging!r}")

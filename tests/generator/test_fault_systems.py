@@ -9,8 +9,10 @@ import pytest
 
 from demseis.dem import NormalFault
 from demseis.generator.config import load_config, parse_config
-from demseis.generator.pipeline import (PARAM_CODES, fault_system_of, param_dtypes, render_run,
-                                        run_info, simulate_run)
+from demseis.generator.engines import get_engine
+from demseis.generator.layout import param_codes, param_dtypes
+from demseis.generator.render import render_run
+from demseis.generator.runsetup import fault_system_of, run_info
 from demseis.generator.sampling import plan_run
 from demseis.parameters import PARAMS
 
@@ -22,7 +24,7 @@ def test_new_parameters_are_declared_once_with_range_and_doc():
         assert p[name].doc
         assert p[name].choices or (p[name].lo is not None and p[name].hi is not None)
     assert "brittle" in p["contact_model"].choices
-    assert tuple(PARAM_CODES["structure"]) == p["structure"].choices
+    assert param_codes()["structure"] == p["structure"].choices
 
 
 def test_default_is_todays_single_normal_fault():
@@ -35,7 +37,7 @@ def test_variety_draws_every_structure_kind_and_count():
     cfg = load_config(preset="variety")
     structures, kinds, counts = Counter(), Counter(), Counter()
     for run in range(cfg.sweep.n_runs):
-        system = run_info(cfg, plan_run(cfg, run).params, run)["_system"]
+        system = run_info(cfg, plan_run(cfg, run).params, run).system
         structures[system.structure] += 1
         counts[len(system.faults)] += 1
         kinds.update(f.kind for f in system.faults)
@@ -52,16 +54,16 @@ def test_samples_record_their_basement_faults():
            "model": {"width_m": 1000.0, "height_m": 450.0, "n_snapshots": 3}}
     cfg = parse_config(raw)
     spec = plan_run(cfg, 0)
-    snaps, info = simulate_run(cfg, spec)
-    data = render_run(cfg, spec, snaps, info)
+    engine = get_engine("dem")
+    data = render_run(cfg, engine.simulate(cfg, spec), engine)
     p = data.params
     assert set(p) == set(param_dtypes())
     assert np.all(p["n_basement_faults"] == 2)
-    kinds = PARAM_CODES["fault_kind"]
+    kinds = param_codes()["fault_kind"]
     assert np.all(p["fault0_kind"] == kinds.index("normal"))
     assert np.all(p["fault2_kind"] == -1) and np.all(p["fault2_x_m"] == -1)
     assert not any(np.isnan(v).any() for v in p.values() if v.dtype.kind == "f")
-    dirs = PARAM_CODES["dip_direction"]
+    dirs = param_codes()["dip_direction"]
     assert p["fault0_dip_direction"][0] == dirs.index("right")
     assert p["fault1_dip_direction"][0] == dirs.index("left")
     assert p["fault1_x_m"][0] - p["fault0_x_m"][0] == pytest.approx(350.0, abs=0.01)

@@ -147,7 +147,7 @@ def test_dry_run_writes_nothing(tmp_path, capsys):
     out = tmp_path / "d.zarr"
     assert main(["generate", "--preset", "quick", "--out", str(out), "--dry-run"]) == 0
     text = capsys.readouterr().out
-    assert "DEM runs: 4" in text and "samples: 48" in text and "estimated time" in text and "MiB" in text
+    assert "dem runs: 4" in text and "samples: 48" in text and "estimated time" in text and "MiB" in text
     assert not out.exists()
 
 
@@ -312,7 +312,7 @@ def test_unreachable_scheduler_writes_nothing(tmp_path, capsys):
 def test_time_domain_output(tmp_path):
     """domain = "time": sections and labels share one TWT axis; labels are the depth labels mapped."""
     from demseis.generator.config import load_config
-    from demseis.generator.pipeline import sample_shape
+    from demseis.generator.layout import sample_shape
 
     cfg_file = tmp_path / "c.toml"
     cfg_file.write_text("[sweep]\nn_runs = 1\n[output]\ndomain = \"time\"\ndt_s = 0.002\n")

@@ -11,8 +11,9 @@ from scipy.integrate import quad
 
 from demseis.errors import InputError
 from demseis.generator.config import load_config
-from demseis.generator.kinematic import fault_geometry, kinematic_state
-from demseis.generator.pipeline import grid_of, run_info
+from demseis.generator.engines.kinematic import fault_geometry, kinematic_state
+from demseis.generator.layout import grid_of
+from demseis.generator.runsetup import run_info
 from demseis.generator.sampling import plan_run
 
 

@@ -7,8 +7,8 @@ import pytest
 
 from demseis.errors import InputError
 from demseis.seismic.forward import synthetic_sections, time_axis
-from demseis.seismic.psf import (dip_filter, dip_weight, imaged_sections, node_angles_deg,
-                                 node_weights, padded_shape, psf_plan, psf_sections)
+from demseis.seismic.psf import (dip_filter, dip_weight, node_angles_deg, node_weights,
+                                 padded_shape, psf_plan, psf_sections)
 from demseis.seismic.wavelet import ricker_half_width_s, ricker_value
 
 # ------------------------------------------------------------------ the mask and the nodes
@@ -221,19 +221,6 @@ def test_depth_dip_filter_equals_direct_convolution_with_its_kernel():
 
 
 # ------------------------------------------------------------------ options and errors
-
-
-def test_imaged_sections_dispatch_and_no_limit():
-    rng = np.random.default_rng(9)
-    vp = rng.uniform(2500, 3500, (50, 30))
-    rho = np.full_like(vp, 2300.0)
-    one_d = synthetic_sections(vp, rho, 10.0, [30.0])
-    np.testing.assert_array_equal(imaged_sections("1d", vp, rho, 10.0, [30.0]), one_d)
-    np.testing.assert_array_equal(psf_sections(vp, rho, 10.0, [30.0], 90.0), one_d)
-    psf = imaged_sections("psf", vp, rho, 10.0, [30.0], max_angle_deg=20.0)
-    assert psf.shape == one_d.shape and not np.allclose(psf, one_d, atol=1e-3)
-    with pytest.raises(InputError, match="imaging"):
-        imaged_sections("2d", vp, rho, 10.0, [30.0])
 
 
 @pytest.mark.parametrize("kw, msg", [

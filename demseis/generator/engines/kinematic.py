@@ -4,7 +4,7 @@ A run is a stack of random layers (thicknesses Gamma-distributed with ``layer_th
 rock from the run's :class:`~demseis.seismic.PropertyModel`), optionally folded
 (``fold_amplitude_m``, ``fold_kind``), cut by the faults of the run's basement system (the same
 ``structure``, ``n_faults``, ``fault_kind``, ``dip_deg``, ``throw_m``, ``dip_direction``,
-``listric_radius_m`` draws as the DEM engine's, :func:`demseis.generator.pipeline.run_info`).
+``listric_radius_m`` draws as the DEM engine's, :func:`demseis.generator.runsetup.run_info`).
 
 Faulting is geometry. Fault ``k`` meets the base of the model at ``x_m`` and rises towards the
 footwall: planar at ``dip_deg``, or listric (a circular arc of radius ``listric_radius_m``,
@@ -16,8 +16,9 @@ first; a sample is computed backwards, youngest fault first, by mapping every pr
 where its rock came from, so older faults are offset by younger ones.
 
 Snapshot ``k`` of ``n_snapshots`` holds the fraction ``k / (n - 1)`` of every throw, so a run
-has the same samples as a DEM run. The properties and labels then go through the shared
-imaging, noise and storage of :func:`demseis.generator.pipeline.render_samples`:
+has the same samples as a DEM run. Each snapshot is a
+:class:`~demseis.generator.engines.State` whose properties and labels go through the imaging,
+noise and storage every engine shares (:mod:`demseis.generator.render`):
 
 - ``fault`` cells lie within ``max(thickness_cells, 1) / 2`` cells (perpendicular) of a fault
   where its throw is > 0; ``damage`` is 2 there and 1 within three times that distance;
@@ -32,22 +33,19 @@ There are no particles: the store's ``particles/`` group stays empty.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
+from scipy.ndimage import gaussian_filter
 
 from demseis.generator.config import Config
-from demseis.generator.pipeline import (
-    ShardData,
-    empty_shard,
-    fault_throws_of,
-    grid_of,
-    property_model_of,
-    render_samples,
-    renders_by_snapshot,
-    run_info,
-)
+from demseis.generator.engines import EngineRun, State
+from demseis.generator.layout import grid_of
+from demseis.generator.runsetup import RunInfo, property_model_of, run_info
 from demseis.generator.sampling import SEED_DEM, SEED_LAYERS, SEED_PROPERTIES, RunSpec, rng_at
+from demseis.schema import engine_labels, sample_array
+from demseis.seismic import draw_layer_properties
 
 #: the layer stack covers depths [-ABOVE, 1 + BELOW] x height (uplift, subsidence and folds)
 ABOVE, BELOW = 1.0, 1.0
@@ -103,7 +101,7 @@ def layer_tops(n_layers: int, cv: float, height_m: float, rng: np.random.Generat
     return -ABOVE * height_m + np.concatenate([[0.0], np.cumsum(h)])
 
 
-def kinematic_state(cfg: Config, params: dict[str, Any], run: int, info: dict[str, Any],
+def kinematic_state(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo,
                     fraction: float) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Layer index and label maps of run ``run`` with ``fraction`` of every throw.
 
@@ -120,14 +118,11 @@ def kinematic_state(cfg: Config, params: dict[str, Any], run: int, info: dict[st
     xc = (np.arange(grid.nx) + 0.5) * cell
     X, D = np.meshgrid(xc, zc)
     shape = X.shape
-    fault = np.zeros(shape, np.uint8)
-    damage = np.zeros(shape, np.uint8)
-    fid = np.zeros(shape, np.int16)
-    slip = np.zeros(shape, np.float32)
-    dip_map = np.zeros(shape, np.float32)
-    sense = np.zeros(shape, np.uint8)
+    maps = {name: np.zeros(shape, sample_array(name).dtype) for name in engine_labels()}
+    fault, damage, fid = maps["fault"], maps["damage"], maps["fault_id"]
+    slip, dip_map, sense = maps["slip_m"], maps["dip_deg"], maps["sense"]
     rng = rng_at(cfg, run, SEED_DEM)
-    faults = info["_system"].faults
+    faults = info.system.faults
     centres = rng.uniform(0.35, 0.65, len(faults)) * H  # drawn whatever the fraction
     fold = fold_field(np.linspace(-W, 2 * W, 3 * grid.nx + 1), W,
                       float(params["fold_amplitude_m"]), str(params["fold_kind"]), rng)
@@ -168,37 +163,55 @@ def kinematic_state(cfg: Config, params: dict[str, Any], run: int, info: dict[st
     # layer 0 is the deepest: count from the bottom of the stack
     from_top = np.clip(np.searchsorted(tops, depth0, side="right") - 1, 0, n_total - 1)
     layer = (n_total - 1 - from_top).astype(np.int64)
-    maps = {"fault": fault, "damage": damage, "strain": np.zeros(shape, np.float32),
-            "layer": layer.astype(np.int16), "fault_id": fid, "slip_m": slip,
-            "dip_deg": dip_map, "sense": sense}
+    maps["layer"] = layer.astype(maps["layer"].dtype)  # strain stays 0: no strain field
     return layer, maps
 
 
-def kinematic_run(cfg: Config, spec: RunSpec) -> ShardData:
-    """All samples of run ``spec.run`` from the kinematic engine (no particles)."""
-    from scipy.ndimage import gaussian_filter
+class KinematicEngine:
+    """The kinematic engine as an :class:`~demseis.generator.engines.Engine` (no particles)."""
 
-    from demseis.seismic import draw_layer_properties
+    particles = False
 
-    p = spec.params
-    info = run_info(cfg, p, spec.run)
-    model = property_model_of(cfg, p)
-    n_snap = cfg.model.n_snapshots
-    arrays, params = empty_shard(cfg, spec)
-    props = None
-    for k, renders in renders_by_snapshot(spec):
-        fraction = k / (n_snap - 1)
-        layer, maps = kinematic_state(cfg, p, spec.run, info, fraction)
-        if props is None:
-            n_total = int(np.ceil(int(p["n_layers"]) * (1.0 + ABOVE + BELOW)))
-            props = draw_layer_properties(n_total, model, rng_at(cfg, spec.run, SEED_PROPERTIES))
-        vp_g, rho_g = props.vp[layer], props.rho[layer]
-        sigma = float(p["gaussian_sigma_cells"])
-        if sigma > 0:
-            vp_g, rho_g = gaussian_filter(vp_g, sigma), gaussian_filter(rho_g, sigma)
-        throws = fault_throws_of(info, k, n_snap)
-        master = info["_system"].faults[info["_system"].master]
-        row = {"snapshot": k, "step": k, "throw_m": fraction * master.throw_m, "n_elements": 0,
-               **throws}
-        render_samples(cfg, spec, renders, vp_g, rho_g, maps, {**info, **row}, arrays, params)
-    return ShardData(arrays=arrays, params=params, snapshots=[])
+    def check(self, cfg: Config) -> None:
+        """Nothing beyond each parameter's range: the geometry has no stability limits."""
+
+    def cost(self, cfg: Config, params: Mapping[str, Any]) -> float:
+        """Every run costs the same (one state per snapshot, one grid pass per fault)."""
+        return 1.0
+
+    def describe(self, cfg: Config) -> tuple[str, float]:
+        """A line for ``--dry-run`` and the seconds of one run on one core (about 0.25 s at
+        the ``quick`` size, ``benchmarks/kinematic_speed.py``; scaled by the cells)."""
+        grid = grid_of(cfg)
+        return (f"geometric, {cfg.model.n_snapshots} states each",
+                0.25 * grid.nz * grid.nx / (110 * 250))
+
+    def simulate(self, cfg: Config, spec: RunSpec,
+                 progress: Callable[[float], None] | None = None) -> EngineRun:
+        """The run's basement faults; the states are computed from them by :meth:`states`."""
+        return EngineRun(spec=spec, info=run_info(cfg, spec.params, spec.run))
+
+    def states(self, cfg: Config, run: EngineRun, snapshots: Sequence[int]) -> Iterator[State]:
+        """Layer properties and labels of snapshot k, with the fraction k / (n - 1) of every
+        throw."""
+        p = run.spec.params
+        model = property_model_of(cfg, p)
+        n_snap = cfg.model.n_snapshots
+        props = None
+        for k in snapshots:
+            fraction = k / (n_snap - 1)
+            layer, maps = kinematic_state(cfg, p, run.spec.run, run.info, fraction)
+            if props is None:
+                n_total = int(np.ceil(int(p["n_layers"]) * (1.0 + ABOVE + BELOW)))
+                props = draw_layer_properties(n_total, model,
+                                              rng_at(cfg, run.spec.run, SEED_PROPERTIES))
+            vp_g, rho_g = props.vp[layer], props.rho[layer]
+            sigma = float(p["gaussian_sigma_cells"])
+            if sigma > 0:
+                vp_g, rho_g = gaussian_filter(vp_g, sigma), gaussian_filter(rho_g, sigma)
+            values = {"step": k, "throw_m": fraction * run.info.master.throw_m, "n_elements": 0,
+                      **run.info.throws_at(k, n_snap)}
+            yield State(snapshot=k, vp_m_s=vp_g, rho_kg_m3=rho_g, labels=maps, values=values)
+
+
+ENGINE = KinematicEngine()

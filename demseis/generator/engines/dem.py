@@ -1,0 +1,137 @@
+"""The DEM engine (``[model] engine = "dem"``): faults grown in the discrete element model.
+
+A run builds a layered assembly (:func:`demseis.dem.build_assembly`) and faults it by moving
+its basement (:func:`demseis.dem.simulate`); each particle snapshot becomes a state: rock
+properties per element, rasterised to the grid (:mod:`demseis.seismic`), and the labels from
+the element displacements (:func:`demseis.labels.label_maps`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from typing import Any
+
+from demseis.errors import ConfigError
+from demseis.dem import NormalFault, build_assembly, simulate, time_step
+from demseis.dem.strata import layer_materials
+from demseis.generator.config import Config
+from demseis.generator.engines import EngineRun, State
+from demseis.generator.layout import grid_of
+from demseis.generator.params import spec_values_hint
+from demseis.generator.physics import check_physics
+from demseis.generator.runsetup import (fault_system_of, layer_thicknesses, material_of,
+                                        property_model_of, run_info, run_properties)
+from demseis.generator.sampling import SEED_DEM, SEED_LAYERS, SEED_PROPERTIES, RunSpec, rng_at
+from demseis.labels import displacement_history, label_maps, strain_history
+from demseis.seismic import draw_layer_properties, element_properties, property_grids
+
+#: ``--dry-run`` cost model, fitted to the seed-scale run measured by benchmarks/dem_seed.py
+#: (11,224 elements: 25.8 s faulting for ~45,900 steps, 15.7 s settling, one core)
+DRY_RUN_ELEMENT_STEPS_PER_S = 2.0e7
+DRY_RUN_SETTLE_S_PER_ELEMENT = 1.4e-3
+DRY_RUN_PACKING = 0.86
+
+
+class DemEngine:
+    """The discrete element model as an :class:`~demseis.generator.engines.Engine`."""
+
+    particles = True
+
+    def check(self, cfg: Config) -> None:
+        """Elements fit the box and the layers, and the DEM's physical sanity rules
+        (:func:`demseis.generator.physics.check_physics`) hold."""
+        m = cfg.model
+        if m.radius_max_m * 8 > min(m.width_m, m.height_m):
+            raise ConfigError(
+                f"model.radius_max_m = {m.radius_max_m:g} is too large for a "
+                f"{m.width_m:g} x {m.height_m:g} m box: at most 1/8 of the smaller side")
+        n_layers = spec_values_hint(cfg.sweep.params["n_layers"])
+        if n_layers and m.height_m / n_layers[1] < 2 * m.radius_min_m:
+            raise ConfigError(
+                f"sweep.n_layers up to {n_layers[1]} gives layers thinner than one element "
+                f"(height_m / n_layers < 2 * radius_min_m = {2 * m.radius_min_m:g} m)")
+        check_physics(cfg)
+
+    def describe(self, cfg: Config) -> tuple[str, float]:
+        """"~N elements each" and the seconds one run takes on one core at most, from the
+        element count of the box and the steps of the longest run (``--dry-run``)."""
+        m = cfg.model
+        # radii are log-uniform (demseis.dem.assembly): E[r^2] = (b^2 - a^2) / (2 ln(b / a))
+        a, b = m.radius_min_m, m.radius_max_m
+        mean_r2 = a * a if b <= a else (b * b - a * a) / (2.0 * math.log(b / a))
+        n_elem = DRY_RUN_PACKING * m.width_m * m.height_m / (math.pi * mean_r2)
+        throw_hi = spec_values_hint(cfg.sweep.params["throw_m"])[1]
+        dip_lo = spec_values_hint(cfg.sweep.params["dip_deg"])[0]
+        kn_lo = spec_values_hint(cfg.sweep.params["kn_n_m"])[0]
+        rho_hi = spec_values_hint(cfg.sweep.params["density_kg_m3"])[1]
+        dt = time_step(a, rho_hi, kn_lo)
+        steps = throw_hi / math.sin(math.radians(dip_lo)) / m.wall_speed_m_s / dt
+        secs = n_elem * (steps / DRY_RUN_ELEMENT_STEPS_PER_S + DRY_RUN_SETTLE_S_PER_ELEMENT)
+        return f"~{n_elem:,.0f} elements each", secs
+
+    def cost(self, cfg: Config, params: Mapping[str, Any]) -> float:
+        """Integrator steps to the target throw plus settling: path along dip / wall speed / dt,
+        with the DEM's own time step (:func:`demseis.dem.time_step`); the element count is the
+        same for every run of a sweep."""
+        m = cfg.model
+        dt = time_step(m.radius_min_m, params["density_kg_m3"], params["kn_n_m"])
+        path_m = params["throw_m"] / math.sin(math.radians(params["dip_deg"]))
+        return (path_m / m.wall_speed_m_s + 4.0) / dt
+
+    def simulate(self, cfg: Config, spec: RunSpec,
+                 progress: Callable[[float], None] | None = None) -> EngineRun:
+        """Build the assembly of run ``spec.run`` and fault it."""
+        p = spec.params
+        material = material_of(p)
+        thick = layer_thicknesses(cfg, int(p["n_layers"]), float(p["layer_thickness_cv"]),
+                                  rng_at(cfg, spec.run, SEED_LAYERS))
+        info = run_info(cfg, p, spec.run)
+        fault = fault_system_of(cfg, p, spec.run)
+        rng = rng_at(cfg, spec.run, SEED_DEM)
+        asm = build_assembly(
+            cfg.model.width_m, cfg.model.height_m,
+            radius_min_m=cfg.model.radius_min_m, radius_max_m=cfg.model.radius_max_m,
+            n_layers=int(p["n_layers"]), layer_thickness_m=thick, material=material, rng=rng,
+        )
+        layers = None
+        if float(p["strength_contrast"]) > 1.0:
+            model = property_model_of(cfg, p)
+            # the same draw as states' (the first layers do not depend on the total)
+            lith = draw_layer_properties(int(p["n_layers"]), model,
+                                         rng_at(cfg, spec.run, SEED_PROPERTIES)).lithology
+            layers = layer_materials([model.lithologies[k] for k in lith], material,
+                                     float(p["strength_contrast"]))
+        # uplift (reverse and listric faults) is eroded at the top of the sample grid
+        uplift = not isinstance(fault, NormalFault) and any(
+            f.kind != "normal" for f in fault.faults)
+        snaps = simulate(asm, fault, material, n_snapshots=cfg.model.n_snapshots,
+                         sedimentation=cfg.model.sedimentation, rng=rng, progress=progress,
+                         erosion_level_m=cfg.model.height_m if uplift else None,
+                         layer_materials=layers)
+        return EngineRun(spec=spec, info=info, snapshots=tuple(snaps))
+
+    def states(self, cfg: Config, run: EngineRun, snapshots: Sequence[int]) -> Iterator[State]:
+        """Rock properties and labels of each wanted particle snapshot.
+
+        The strain and displacement histories run over every snapshot of the run (cumulative
+        strain, and the snapshot each element first appeared in)."""
+        snaps = list(run.snapshots)
+        grid = grid_of(cfg)
+        model = property_model_of(cfg, run.spec.params)
+        n_layers_total = max(int(s.layer.max()) for s in snaps) + 1
+        layer_props, elem_seed = run_properties(cfg, run.spec.run, model, n_layers_total)
+        history = strain_history(snaps, cfg.labels)
+        disp = displacement_history(snaps) if cfg.labels.method == "slip_trace" \
+            else [None] * len(snaps)
+        for k in snapshots:
+            snap = snaps[k]
+            vp_e, rho_e = element_properties(snap.ids, snap.layer, layer_props, model, elem_seed)
+            vp_g, rho_g = property_grids(snap.xy, snap.radius, vp_e, rho_e, snap.layer, grid, model)
+            labels = label_maps(snap, history[k], grid, cfg.labels, displacement=disp[k])
+            values = {"step": snap.step, "throw_m": snap.throw_m, "n_elements": snap.n,
+                      **run.info.throws_at(k, len(snaps))}
+            yield State(snapshot=k, vp_m_s=vp_g, rho_kg_m3=rho_g, labels=labels, values=values)
+
+
+ENGINE = DemEngine()

@@ -1,0 +1,83 @@
+"""What a sweep stores: its raster grid, sample shape, sample arrays and parameter arrays.
+
+Everything here is derived from a :class:`~demseis.generator.config.Config` and the
+declarations on the ground floor: the sample arrays from :mod:`demseis.schema`, the
+per-sample parameters from :mod:`demseis.parameters` (``SCENARIO`` and ``STORED``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from demseis.generator.config import Config
+from demseis.generator.params import spec_values_hint
+from demseis.parameters import SCENARIO, STORED
+from demseis.schema import SAMPLE_ARRAYS, stored_arrays
+from demseis.seismic import time_axis
+from demseis.types import Grid
+
+#: the order of the code tables in a store's ``param_codes`` attribute: the order in which
+#: these parameters were added, so that a store keeps its bytes; a new ``str`` parameter goes
+#: after them
+_CODES_ORDER = ("noise_kind", "dip_direction", "contact_model", "imaging", "structure",
+                "fault_kind", "fold_kind")
+
+
+def param_codes() -> dict[str, tuple[str, ...]]:
+    """Integer codes of every ``str`` per-sample parameter: ``params/<name>`` holds the index
+    of the value among its declared choices (``fault<k>_kind`` and ``fault<k>_dip_direction``
+    index ``fault_kind`` and ``dip_direction``)."""
+    names = sorted((k for k, p in SCENARIO.items() if p.kind is str),
+                   key=lambda k: _CODES_ORDER.index(k) if k in _CODES_ORDER else len(_CODES_ORDER))
+    return {k: tuple(SCENARIO[k].choices) for k in names}
+
+
+def grid_of(cfg: Config) -> Grid:
+    """The raster grid shared by every sample of a sweep."""
+    return Grid.covering(cfg.model.width_m, cfg.model.height_m, cfg.grid.cell_m)
+
+
+def time_axis_of(cfg: Config) -> np.ndarray | None:
+    """The two-way-time axis (s) of a time-domain sweep, None in the depth domain.
+
+    Its length must be the same for every run, so it is built for the slowest Vp any run can
+    produce: the smallest lithology Vp, lowered by the largest ``vp_scatter`` the sweep allows.
+    """
+    if cfg.output.domain != "time":
+        return None
+    scatter_hi = spec_values_hint(cfg.sweep.params["vp_scatter"])[1]
+    vp_min = float(min(cfg.properties["vp_min_m_s"])) * (1.0 - 3.0 * float(scatter_hi))
+    grid = grid_of(cfg)
+    return time_axis(grid.nz, grid.cell_m, vp_min, cfg.output.dt_s)
+
+
+def sample_shape(cfg: Config) -> tuple[int, int]:
+    """(H, W) of every stored sample: grid cells (depth) or (time samples, columns)."""
+    grid = grid_of(cfg)
+    t_s = time_axis_of(cfg)
+    return grid.shape if t_s is None else (int(t_s.size), grid.nx)
+
+
+def array_dtypes(cfg: Config) -> dict[str, str]:
+    """Name → dtype of the per-sample arrays this config stores, in store order."""
+    options = {a.option for _, a in SAMPLE_ARRAYS.items()
+               if a.option is not None and getattr(cfg.output, a.option, False)}
+    return {name: SAMPLE_ARRAYS.get(name).dtype for name in stored_arrays(options)}
+
+
+def param_dtypes() -> dict[str, str]:
+    """Name → dtype of the per-sample parameter arrays (``params/`` in the store)."""
+    out = {s.name: s.dtype for s in STORED}
+    codes = param_codes()
+    for key, pdef in SCENARIO.items():
+        if key in out:
+            continue
+        if key in codes:
+            out[key] = "int8"
+        elif pdef.kind is int:
+            out[key] = "int32"
+        elif pdef.kind is bool:
+            out[key] = "uint8"
+        else:
+            out[key] = "float32"
+    return out
