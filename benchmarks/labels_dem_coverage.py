@@ -40,11 +40,11 @@ def _snapshots(preset: str, run: int, cache: str | None):
         with open(path, "rb") as fh:
             return pickle.load(fh)
     from demseis.generator.config import load_config
-    from demseis.generator.pipeline import simulate_run
+    from demseis.generator.engines import get_engine
     from demseis.generator.sampling import plan_run
 
     cfg = load_config(None, preset=preset)
-    snaps, _ = simulate_run(cfg, plan_run(cfg, run))
+    snaps = list(get_engine("dem").simulate(cfg, plan_run(cfg, run)).snapshots)
     if path:
         os.makedirs(cache, exist_ok=True)
         with open(path, "wb") as fh:
@@ -104,7 +104,7 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
     """Coverage, rungs, loops, slip floor and label_maps time of one DEM run."""
 
     from demseis.generator.config import load_config
-    from demseis.generator.pipeline import grid_of
+    from demseis.generator.layout import grid_of
     from demseis.labels import label_maps, strain_history
     from demseis.labels.coverage import jump_coverage, jump_field
     from demseis.labels.traces import displacement_history, loop_count, rung_fraction
@@ -156,7 +156,7 @@ def ab_timing(preset: str, run: int, cache: str | None, repeats: int = 3) -> dic
     import dataclasses
 
     from demseis.generator.config import load_config
-    from demseis.generator.pipeline import grid_of
+    from demseis.generator.layout import grid_of
     from demseis.labels import label_maps, strain_history
     from demseis.labels.traces import displacement_history
 

@@ -26,11 +26,11 @@ def _snapshots(path: str | None):
         with open(path, "rb") as fh:
             return pickle.load(fh)
     from demseis.generator.config import load_config
-    from demseis.generator.pipeline import simulate_run
+    from demseis.generator.engines import get_engine
     from demseis.generator.sampling import plan_run
 
     cfg = load_config(preset="seed")
-    snaps, _ = simulate_run(cfg, plan_run(cfg, 0))
+    snaps = list(get_engine("dem").simulate(cfg, plan_run(cfg, 0)).snapshots)
     return snaps
 
 

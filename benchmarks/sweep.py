@@ -51,7 +51,7 @@ def _profile(s, workers: int) -> dict[str, float]:
         "compute_samples_per_s": n / s.compute_seconds,
         "wall_s": s.seconds,
         **{f"{k}_s": v for k, v in s.phase_seconds.items()},
-        "task_dem_s": sum(t["dem_s"] for t in tasks),
+        "task_engine_s": sum(t["engine_s"] for t in tasks),
         "task_render_s": sum(t["render_s"] for t in tasks),
         "task_write_s": sum(t["write_s"] for t in tasks),
         "task_cpu_s": sum(t.get("cpu_s", 0.0) for t in tasks),

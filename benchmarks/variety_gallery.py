@@ -33,12 +33,15 @@ def main(argv=None) -> int:
     import matplotlib.pyplot as plt
     import zarr
 
-    from demseis.generator.pipeline import PARAM_CODES
+    from demseis.generator.layout import param_codes
+    from demseis.parameters import MAX_BASEMENT_FAULTS
+
+    codes = param_codes()
 
     root = zarr.open_group(args.store, mode="r")
     p = {k: root["params"][k][:] for k in ("run_id", "snapshot", "freq_hz", "structure",
                                            "n_basement_faults")}
-    kinds = [root["params"][f"fault{k}_kind"][:] for k in range(5)]
+    kinds = [root["params"][f"fault{k}_kind"][:] for k in range(MAX_BASEMENT_FAULTS)]
     picked = []
     for run in range(args.n):
         sel = np.flatnonzero((p["run_id"] == run) & (p["freq_hz"] == 40.0))
@@ -50,8 +53,8 @@ def main(argv=None) -> int:
         seis = root["seismic"][i]
         lab = root["damage"][i].astype(float)
         lab[root["fault"][i] > 0] = 3.0
-        names = [PARAM_CODES["fault_kind"][int(k[i])] for k in kinds if k[i] >= 0]
-        title = (f"run {int(p['run_id'][i])}: {PARAM_CODES['structure'][int(p['structure'][i])]}"
+        names = [codes["fault_kind"][int(k[i])] for k in kinds if k[i] >= 0]
+        title = (f"run {int(p['run_id'][i])}: {codes['structure'][int(p['structure'][i])]}"
                  f", {', '.join(names)}")
         v = np.percentile(np.abs(seis), 99) or 1.0
         a, b = axes[q // 2, 2 * (q % 2)], axes[q // 2, 2 * (q % 2) + 1]

@@ -1,0 +1,130 @@
+"""Extension points, proven from outside the package: a toy engine, a toy imaging mode and a toy
+label array, each registered here (no package file names them), go through ``generate`` ->
+``validate`` -> the torch Dataset."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import pytest
+
+import demseis
+from demseis.datasets import FaultSegDataset, validate_store
+from demseis.errors import ConfigError
+from demseis.generator.config import load_config, parse_config
+from demseis.generator.engines import Engine, EngineRun, State, get_engine
+from demseis.generator.layout import grid_of
+from demseis.generator.rerender import rerender
+from demseis.generator.runsetup import run_info
+from demseis.registry import ENGINES, IMAGING
+from demseis.schema import engine_labels, sample_array
+from demseis.seismic import ImagingMode, synthetic_sections
+
+
+def tiny(**model: Any) -> dict[str, Any]:
+    raw = load_config(preset="tiny").to_dict()
+    raw["model"].update(model)
+    return raw
+
+
+class FlatEngine:
+    """No faulting: horizontal beds of alternating rock, the same at every snapshot."""
+
+    particles = False
+
+    def __init__(self) -> None:
+        self.simulated: list[int] = []
+
+    def check(self, cfg) -> None:
+        if cfg.model.width_m < 500:
+            raise ConfigError("flat engine: model.width_m must be >= 500")
+
+    def cost(self, cfg, params: Mapping[str, Any]) -> float:
+        return 1.0
+
+    def describe(self, cfg) -> tuple[str, float]:
+        return "flat beds", 0.01
+
+    def simulate(self, cfg, spec, progress=None) -> EngineRun:
+        self.simulated.append(spec.run)
+        return EngineRun(spec=spec, info=run_info(cfg, spec.params, spec.run))
+
+    def states(self, cfg, run: EngineRun, snapshots: Sequence[int]) -> Iterator[State]:
+        grid = grid_of(cfg)
+        rows = np.arange(grid.nz)[:, None] * np.ones((1, grid.nx))
+        bed = (rows // 5).astype(np.int16)
+        vp = np.where(bed % 2 == 0, 2500.0, 3200.0)
+        rho = np.full(grid.shape, 2300.0)
+        for k in snapshots:
+            labels = {n: np.zeros(grid.shape, sample_array(n).dtype) for n in engine_labels()}
+            labels["layer"] = bed
+            yield State(snapshot=k, vp_m_s=vp, rho_kg_m3=rho, labels=labels,
+                        values={"step": k, "throw_m": 0.0, "n_elements": 0})
+
+
+@pytest.fixture
+def flat_engine():
+    engine = FlatEngine()
+    with ENGINES.registered("flat", engine):
+        yield engine
+    assert "flat" not in ENGINES
+
+
+def test_a_registered_engine_goes_from_generate_to_the_dataset(tmp_path, flat_engine):
+    assert isinstance(flat_engine, Engine)
+    with pytest.raises(ConfigError, match="flat engine"):   # its own check runs at load
+        parse_config(tiny(engine="flat", width_m=400.0))
+    out = tmp_path / "flat.zarr"
+    store = demseis.generate(tiny(engine="flat"), out=out, workers=0, progress=False)
+    assert sorted(flat_engine.simulated) == [0, 1]
+    assert validate_store(out).ok
+    ds = FaultSegDataset(out, targets=("fault", "layer"))
+    x, y = ds[3]
+    assert x.shape == (1, *store.layout.shape)
+    assert int(y["fault"].sum()) == 0                           # no faulting, no fault label
+    assert np.array_equal(y["layer"].numpy()[:, 0], np.arange(store.layout.shape[0]) // 5)
+    # the beds are imaged: flat reflectors, the same in every column
+    sec = np.asarray(store.sample(0)["seismic"])
+    assert np.abs(sec).max() > 0 and np.allclose(sec, sec[:, :1], atol=1e-6)
+    # no particles: commands that need them refuse in one line naming the engine
+    with pytest.raises(demseis.DemseisError, match="'flat'"):
+        rerender(out, tmp_path / "r.zarr", freqs_hz=[20.0], snrs_db=[np.inf], noise_kind="white",
+                 progress=False)
+
+
+def test_unknown_engine_is_a_config_error_listing_the_engines():
+    with pytest.raises(ConfigError, match="kinematic"):
+        parse_config(tiny(engine="nonesuch"))
+    with pytest.raises(demseis.DemseisError, match="'dem', 'kinematic'"):
+        get_engine("nonesuch")
+
+
+def _negated(vp_g, rho_g, cell_m, freqs_hz, domain="depth", *, t_s=None):
+    return -synthetic_sections(vp_g, rho_g, cell_m, freqs_hz, domain, t_s=t_s)
+
+
+def test_a_registered_imaging_mode_goes_from_generate_to_the_dataset(tmp_path):
+    raw = tiny(engine="kinematic")
+    raw["sweep"]["snr_db"] = "inf"
+    one_d = demseis.generate(raw, out=tmp_path / "1d.zarr", workers=0, progress=False)
+    with IMAGING.registered("negated", ImagingMode(_negated, title=lambda v: "negated")):
+        raw["sweep"]["imaging"] = ["1d", "negated"]
+        out = tmp_path / "neg.zarr"
+        store = demseis.generate(raw, out=out, workers=0, progress=False)
+        assert validate_store(out).ok
+        names = np.asarray(store.params["imaging"])
+        assert set(names.tolist()) == {"1d", "negated"}
+        assert store.attrs["param_codes"]["imaging"] == ["1d", "psf", "negated"]
+        ds = FaultSegDataset(out)
+        neg = np.flatnonzero(names == "negated")
+        x, _ = ds[neg[0]]
+        # the same snapshot imaged in 1-D by the plain store, negated here
+        row = {k: store.params[k][neg[0]] for k in ("run_id", "snapshot")}
+        twin = next(i for i in range(len(one_d)) if all(one_d.params[k][i] == v
+                                                          for k, v in row.items()))
+        np.testing.assert_allclose(x.numpy()[0], -np.asarray(one_d.sample(twin)["seismic"]),
+                                   atol=1e-6)
+    with pytest.raises(ConfigError, match="imaging"):     # gone with its registration
+        parse_config(raw)
