@@ -1,4 +1,4 @@
-"""Toy inputs for tests, benchmarks and examples: disk packs and one kinematic normal fault.
+"""Toy inputs for tests, benchmarks and figure scripts: disk packs and one kinematic normal fault.
 
 Nothing here is mechanics: faulting is geometry. One planar normal fault model serves every toy:
 :func:`fault_signed_distance` says which side of the plane a point is on, and
