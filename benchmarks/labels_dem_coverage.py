@@ -1,13 +1,13 @@
-"""Issue 13's DEM coverage of the slip-trace labels, per preset. Prints one JSON line.
+"""DEM coverage of the slip-trace labels, per preset. Prints one JSON line.
 
-Coverage = share of the cells whose displacement jump (:func:`demseis.diagnostics.coverage.jump_field`,
-from the particles, independent of the extraction) is >= 2 x min_slip_m that lie within 2
-cells of a fault label, pooled over the snapshots after the first of each run: ``coverage``
-for the ``fault`` mask (the slip-surface lines), ``core_coverage`` for the fault core
-(``damage`` class 2: the fault mask and the shear band's core around it). Also per run:
-rungs (worst snapshot), loops, whether every labelled cell slips >= min_slip_m, the missed
-high-jump cells by their distance to the nearest label (cells), and the median
-``label_maps`` time per snapshot (seed preset: the figure to compare).
+Coverage = share of the cells whose displacement jump
+(:func:`demseis.diagnostics.coverage.jump_field`, from the particles, independent of the
+extraction) is >= 2 x min_slip_m that lie within 2 cells of a fault label, pooled over the
+snapshots after the first of each run: ``coverage`` for the ``fault`` mask (the slip-surface
+lines), ``core_coverage`` for the fault core (``damage`` class 2: the fault mask and the shear
+band's core around it). Also per run: rungs (worst snapshot), loops, whether every labelled cell
+slips >= min_slip_m, the missed high-jump cells by their distance to the nearest label (cells),
+and the median ``label_maps`` time per snapshot (seed preset: the figure to compare).
 
     python benchmarks/labels_dem_coverage.py [--runs quick:0,1 seed:0] [--cache DIR] \
         [--strand-sigma-cells 0] [--set KEY=VALUE ...] [--kinematic] [--ab-timing] \

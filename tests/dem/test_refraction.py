@@ -7,9 +7,9 @@ layers 9x lower cohesion, 4x softer, half the friction; :func:`demseis.dem.strat
 The dip of the fault in each unit is fitted in reference coordinates
 (:func:`demseis.diagnostics.measure.unit_dips`, checked on a kinematic fault with imposed
 refraction in ``tests/diagnostics/test_measure.py``). The same runs with uniform mechanics are
-the control: the dip of a brittle fault wanders from unit to unit by itself (per run the control's strong-minus-weak difference
-was -3.7 to +8 deg over three seeds, docs/dem.md), so two seeds are averaged and the contrast
-must beat its own control.
+the control: the dip of a brittle fault wanders from unit to unit by itself (per run the
+control's strong-minus-weak difference was -3.7 to +8 deg over three seeds, docs/dem.md), so
+two seeds are averaged and the contrast must beat its own control.
 """
 
 from __future__ import annotations

@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from demseis.diagnostics.toys import (disk_pack, down_dip_vector, fault_signed_distance, faulted_section,
-                             faulted_sequence, kinematic_fault)
+from demseis.diagnostics.toys import (disk_pack, down_dip_vector, fault_signed_distance,
+                                      faulted_section, faulted_sequence, kinematic_fault)
 
 
 def test_toy_sequence_geometry():
