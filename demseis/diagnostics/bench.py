@@ -438,8 +438,8 @@ def loader_benchmark(
         for nw in workers:
             kw = dict(batch_size=batch_size, num_workers=nw, persistent_workers=nw > 0)
             zl = DataLoader(ds, sampler=ShardAwareSampler(ds, seed=seed), **kw)
-            ml = DataLoader(mm, sampler=RandomSampler(mm, generator=torch.Generator().manual_seed(seed)),
-                            **kw)
+            order = torch.Generator().manual_seed(seed)
+            ml = DataLoader(mm, sampler=RandomSampler(mm, generator=order), **kw)
             rates, first = _interleaved_rates({"zarr": zl, "memmap": ml}, n, repeats)
             z_rates, m_rates = rates["zarr"], rates["memmap"]
             del zl, ml
