@@ -58,7 +58,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from demseis.dem import Material  # noqa: E402,F401
 from demseis.dem.assembly import draw_radii, loose_grid  # noqa: E402
-from demseis.bench import BENCH_MATERIAL, load_pack, pack_walls, seed_pack  # noqa: E402
+from demseis.diagnostics.bench import BENCH_MATERIAL, load_pack, pack_walls, seed_pack  # noqa: E402
 from demseis.dem.engine import Engine, time_step  # noqa: E402
 
 

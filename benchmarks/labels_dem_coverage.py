@@ -1,13 +1,13 @@
-"""Issue 13's DEM coverage of the slip-trace labels, per preset. Prints one JSON line.
+"""DEM coverage of the slip-trace labels, per preset. Prints one JSON line.
 
-Coverage = share of the cells whose displacement jump (:func:`demseis.labels.coverage.jump_field`,
-from the particles, independent of the extraction) is >= 2 x min_slip_m that lie within 2
-cells of a fault label, pooled over the snapshots after the first of each run: ``coverage``
-for the ``fault`` mask (the slip-surface lines), ``core_coverage`` for the fault core
-(``damage`` class 2: the fault mask and the shear band's core around it). Also per run:
-rungs (worst snapshot), loops, whether every labelled cell slips >= min_slip_m, the missed
-high-jump cells by their distance to the nearest label (cells), and the median
-``label_maps`` time per snapshot (seed preset: the figure to compare).
+Coverage = share of the cells whose displacement jump
+(:func:`demseis.diagnostics.coverage.jump_field`, from the particles, independent of the
+extraction) is >= 2 x min_slip_m that lie within 2 cells of a fault label, pooled over the
+snapshots after the first of each run: ``coverage`` for the ``fault`` mask (the slip-surface
+lines), ``core_coverage`` for the fault core (``damage`` class 2: the fault mask and the shear
+band's core around it). Also per run: rungs (worst snapshot), loops, whether every labelled cell
+slips >= min_slip_m, the missed high-jump cells by their distance to the nearest label (cells),
+and the median ``label_maps`` time per snapshot (seed preset: the figure to compare).
 
     python benchmarks/labels_dem_coverage.py [--runs quick:0,1 seed:0] [--cache DIR] \
         [--strand-sigma-cells 0] [--set KEY=VALUE ...] [--kinematic] [--ab-timing] \
@@ -106,7 +106,7 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
     from demseis.generator.config import load_config
     from demseis.generator.layout import grid_of
     from demseis.labels import label_maps, strain_history
-    from demseis.labels.coverage import jump_coverage, jump_field
+    from demseis.diagnostics.coverage import jump_coverage, jump_field
     from demseis.labels.traces import displacement_history, loop_count, rung_fraction
 
     cfg = load_config(None, preset=preset)
@@ -188,9 +188,9 @@ def kinematic(metric: str = "euclidean") -> dict:
     """Coverage of the labels (fault mask and fault core) and of the true plane on the planar
     kinematic faults."""
     from demseis.labels import LabelConfig, label_maps, strain_history
-    from demseis.labels.coverage import jump_coverage, jump_field
+    from demseis.diagnostics.coverage import jump_coverage, jump_field
     from demseis.labels.traces import displacement_history
-    from demseis.testing import disk_pack, fault_signed_distance, kinematic_fault
+    from demseis.diagnostics.toys import disk_pack, fault_signed_distance, kinematic_fault
     from demseis.types import Grid, Snapshot
 
     width, height, cell = 2000.0, 1000.0, 10.0

@@ -20,7 +20,7 @@ from scipy.spatial import cKDTree
 
 from demseis.types import Snapshot
 from demseis.labels import LabelConfig, element_strain, label_maps, mask_thickness_cells
-from demseis.testing import disk_pack, fault_signed_distance, kinematic_fault
+from demseis.diagnostics.toys import disk_pack, fault_signed_distance, kinematic_fault
 from demseis.types import Grid
 
 W, H, XF = 2000.0, 1000.0, 1200.0

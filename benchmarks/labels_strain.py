@@ -5,7 +5,7 @@ Run: PYTHONPATH=$PWD NUMBA_NUM_THREADS=1 python benchmarks/labels_strain.py  (on
 
 import json
 
-from demseis.bench import labels_benchmark as run_benchmark
+from demseis.diagnostics.bench import labels_benchmark as run_benchmark
 
 if __name__ == "__main__":
     print(json.dumps(run_benchmark()))

@@ -31,7 +31,7 @@ def main() -> None:
     import torch
     from torch.utils.data import DataLoader
 
-    from demseis.bench import synthetic_shard
+    from demseis.diagnostics.bench import synthetic_shard
     from demseis.datasets import (
         FaultSegDataset,
         ShardAwareSampler,

@@ -13,7 +13,7 @@ import numpy as np
 
 from demseis.evaluation.baseline import dip_fault_probability, semblance_fault_probability
 from demseis.evaluation.scoring import score
-from demseis.bench import median_ms
+from demseis.diagnostics.bench import median_ms
 
 
 def _seconds(fn, repeats: int) -> float:

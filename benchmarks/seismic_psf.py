@@ -22,7 +22,7 @@ import time
 
 import numpy as np
 
-from demseis.testing import faulted_sequence
+from demseis.diagnostics.toys import faulted_sequence
 from demseis.seismic.forward import synthetic_sections, time_axis
 from demseis.types import Grid
 from demseis.seismic.properties import (PropertyModel, draw_layer_properties, element_properties,

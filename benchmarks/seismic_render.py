@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from demseis.bench import seismic_benchmark as run_benchmark
+from demseis.diagnostics.bench import seismic_benchmark as run_benchmark
 
 
 def main() -> None:

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from demseis.datasets import create_store, shard_status, validate_store, write_shard
-from demseis.bench import median_ms, synthetic_shard
+from demseis.diagnostics.bench import median_ms, synthetic_shard
 
 
 def _seconds(fn, repeats: int) -> float:

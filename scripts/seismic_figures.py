@@ -8,7 +8,7 @@
 
 Snapshots come from an ``.npz`` written from DEM snapshots with
 :func:`demseis.types.save_snapshots` or, without one, from the kinematic toy sequence of
-:func:`demseis.testing.faulted_sequence` (the figure title says which).
+:func:`demseis.diagnostics.toys.faulted_sequence` (the figure title says which).
 matplotlib is imported inside the functions.
 """
 
@@ -175,7 +175,7 @@ def main(argv=None) -> int:
         snaps = load_snapshots(a.npz)
         source = "DEM (branch dem, simulate)"
     else:
-        from demseis.testing import faulted_sequence
+        from demseis.diagnostics.toys import faulted_sequence
 
         snaps = faulted_sequence(a.width_m, a.height_m, dip_deg=60.0,
                                  rng=np.random.default_rng(0))

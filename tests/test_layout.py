@@ -1,10 +1,12 @@
 """The import graph of the package runs one way, has no cycles, and nothing imports ``tests``.
 
-cli -> plotting / bench / api -> generator -> evaluation -> datasets -> dem | seismic | labels
--> testing -> types / parameters / schema -> registry -> errors. A stage (dem, seismic, labels)
-never imports ``datasets`` and reaches another stage only through its package (``from
-demseis.seismic import rasterise``), never its modules. No module imports, even indirectly, a
-module that imports it. Every import counts, including those inside functions.
+cli -> plotting / api -> generator -> evaluation -> datasets -> dem | seismic | labels
+-> types / parameters / schema -> registry -> errors. A stage (dem, seismic, labels) never
+imports ``datasets`` and reaches another stage only through its package (``from demseis.seismic
+import rasterise``), never its modules. ``diagnostics`` (benchmarks, calibration, measures, toy
+inputs) may import any of these but no product module imports it: only the handlers of
+``demseis bench`` do, inside themselves. No module imports, even indirectly, a module that
+imports it. Every import counts, including those inside functions.
 """
 
 from __future__ import annotations
@@ -22,14 +24,15 @@ RANK = {
     "errors": 0,
     "registry": 1,
     "types": 2, "parameters": 2, "schema": 2,
-    "testing": 3,
-    "dem": 4, "seismic": 4, "labels": 4,
-    "datasets": 5,
-    "evaluation": 6,
-    "generator": 7,
-    "api": 8, "plotting": 8, "bench": 8,
-    "cli": 9, "__main__": 10,
+    "dem": 3, "seismic": 3, "labels": 3,
+    "datasets": 4,
+    "evaluation": 5,
+    "generator": 6,
+    "api": 7, "plotting": 7, "diagnostics": 7,
+    "cli": 8, "__main__": 9,
 }
+#: the modules outside ``demseis/diagnostics`` that may import it, and only inside a function
+DIAGNOSTICS_USERS = {"cli/bench.py"}
 #: names of the root package any module may import (the root module imports nothing heavy)
 ROOT_NAMES = {"__version__", "DemseisError"}
 
@@ -55,6 +58,20 @@ def _imports(path: Path) -> list[tuple[str, list[str], int]]:
                 mod = node.module or ""
             out.append((mod, [a.name for a in node.names], node.lineno))
     return out
+
+
+def _module_level_import_lines(path: Path) -> set[int]:
+    """Lines of the imports that run when ``path`` is imported (not inside a function)."""
+    lines: set[int] = set()
+    stack = list(ast.parse(path.read_text(), str(path)).body)
+    while stack:
+        node = stack.pop()
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+            continue
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            lines.add(node.lineno)
+        stack.extend(ast.iter_child_nodes(node))
+    return lines
 
 
 def _module_files() -> list[Path]:
@@ -122,6 +139,51 @@ def test_nothing_imports_tests():
                 if mod == "tests" or mod.startswith("tests."):
                     bad.append(f"{path.relative_to(ROOT)}:{line} imports {mod}")
     assert not bad, "\n".join(bad)
+
+
+def test_product_never_imports_diagnostics():
+    bad = []
+    for path in _module_files():
+        rel = path.relative_to(PKG)
+        if rel.parts[0] == "diagnostics":
+            continue
+        allowed = rel.as_posix() in DIAGNOSTICS_USERS
+        eager = _module_level_import_lines(path)
+        for mod, names, line in _imports(path):
+            if not (mod == "demseis.diagnostics" or mod.startswith("demseis.diagnostics.")
+                    or (mod == "demseis" and "diagnostics" in names)):
+                continue
+            if not allowed:
+                bad.append(f"{rel}:{line} imports {mod} (a product module)")
+            elif line in eager:
+                bad.append(f"{rel}:{line} imports {mod} at import time (only inside a handler)")
+    assert not bad, "demseis.diagnostics reached from the product:\n" + "\n".join(bad)
+
+
+def test_diagnostics_check_is_not_vacuous(tmp_path, monkeypatch):
+    """Product imports of diagnostics are caught, eager ones in cli/bench.py too; lazy pass."""
+    fake = tmp_path / "demseis"
+    for sub in ("generator", "cli", "diagnostics"):
+        (fake / sub).mkdir(parents=True)
+    (fake / "__init__.py").write_text("")
+    (fake / "generator" / "x.py").write_text(
+        "def f():\n    from demseis.diagnostics.toys import disk_pack\n")
+    (fake / "cli" / "plots.py").write_text("from demseis import diagnostics\n")
+    (fake / "cli" / "bench.py").write_text(
+        "import demseis.diagnostics.bench\n"
+        "def cmd():\n    from demseis.diagnostics import bench\n")
+    (fake / "diagnostics" / "bench.py").write_text("from demseis.diagnostics.toys import x\n")
+    monkeypatch.setattr(f"{__name__}.PKG", fake)
+    monkeypatch.setattr(f"{__name__}.ROOT", tmp_path)
+    try:
+        test_product_never_imports_diagnostics()
+    except AssertionError as exc:
+        msg = str(exc)
+        assert "generator/x.py:2" in msg and "cli/plots.py:1" in msg, msg
+        assert "cli/bench.py:1" in msg and "cli/bench.py:3" not in msg, msg
+        assert "diagnostics/bench.py" not in msg, msg
+    else:
+        raise AssertionError("a generator -> diagnostics import passed the check")
 
 
 def test_checker_catches_a_backward_import(tmp_path, monkeypatch):

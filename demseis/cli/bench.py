@@ -1,6 +1,9 @@
 """``demseis bench dem|seismic|labels|loader``: speed benchmarks printing one JSON line each.
 
-The code that is timed lives in :mod:`demseis.bench`.
+The code that is timed lives in :mod:`demseis.diagnostics.bench`. Each handler imports it inside
+itself: the diagnostics load the DEM, seismic and label stages (and the loader torch), which
+neither ``demseis --help`` nor the product commands need, and no product module may import
+:mod:`demseis.diagnostics` (``tests/test_layout.py``).
 """
 
 from __future__ import annotations
@@ -55,7 +58,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
 
 def cmd_dem(args: argparse.Namespace) -> int:
-    from demseis import bench
+    from demseis.diagnostics import bench
 
     if args.steps < 1:
         raise InputError(f"--steps {args.steps}: must be >= 1")
@@ -71,7 +74,7 @@ def cmd_dem(args: argparse.Namespace) -> int:
 
 
 def cmd_seismic(args: argparse.Namespace) -> int:
-    from demseis.bench import seismic_benchmark
+    from demseis.diagnostics.bench import seismic_benchmark
 
     for name in ("nx", "nz", "repeats"):
         if getattr(args, name) < 1:
@@ -84,7 +87,7 @@ def cmd_seismic(args: argparse.Namespace) -> int:
 
 
 def cmd_labels(args: argparse.Namespace) -> int:
-    from demseis.bench import labels_benchmark
+    from demseis.diagnostics.bench import labels_benchmark
 
     if args.snapshots < 2 or args.repeats < 1:
         raise InputError(f"--snapshots must be >= 2 and --repeats >= 1; got {args.snapshots}, "
@@ -94,7 +97,7 @@ def cmd_labels(args: argparse.Namespace) -> int:
 
 
 def cmd_loader(args: argparse.Namespace) -> int:
-    from demseis.bench import loader_benchmark
+    from demseis.diagnostics.bench import loader_benchmark
 
     result = loader_benchmark(
         n_shards=args.shards,

@@ -532,20 +532,3 @@ def check_state(pos, vel, box, vmax_limit):
         if x < box[0] or x > box[1] or y < box[2] or y > box[3]:
             return STATUS_BOX, i
     return STATUS_OK, -1
-
-
-@njit(cache=True)
-def coordination(pos, radius, nbr, n_nbr, tol):
-    """Per-element contact count: pairs with d < r_i + r_j + tol (m). Returns (n,) int64."""
-    n = pos.shape[0]
-    z = np.zeros(n, dtype=np.int64)
-    for i in range(n):
-        for k in range(n_nbr[i]):
-            j = nbr[i, k]
-            dx = pos[j, 0] - pos[i, 0]
-            dy = pos[j, 1] - pos[i, 1]
-            rr = radius[i] + radius[j] + tol
-            if dx * dx + dy * dy < rr * rr:
-                z[i] += 1
-                z[j] += 1
-    return z

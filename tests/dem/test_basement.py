@@ -11,7 +11,7 @@ import pytest
 
 from demseis.dem import Material, NormalFault, build_assembly, settle_pack, simulate
 from demseis.dem import basement as B
-from demseis.dem.measure import displacement_jump, section_length, slip_sense
+from demseis.diagnostics.measure import displacement_jump, section_length, slip_sense
 from demseis.errors import InputError
 
 W, H = 1000.0, 500.0
@@ -253,7 +253,7 @@ def test_brittle_cover_localises_at_seed_scale():
     """Seed scale (5 km x 2.77 km, 45 deg, 450 m): the brittle cover steps the mid-depth
     horizon by >= half the throw within 100 m; the default (ductile) material drapes it."""
     from demseis.dem import BRITTLE
-    from demseis.dem.measure import horizon_step
+    from demseis.diagnostics.measure import horizon_step
 
     pack = settle_pack(5000.0, 2770.0, rng=0)
     asm_ = build_assembly(5000.0, 2770.0, n_layers=48, pack=pack)

@@ -5,11 +5,11 @@ units alternating sandstone and shale from the base, a brittle cover whose stron
 :data:`demseis.dem.BRITTLE` (strength contrast 9 about a base cohesion of BRITTLE's / 3: weak
 layers 9x lower cohesion, 4x softer, half the friction; :func:`demseis.dem.strata.layer_materials`).
 The dip of the fault in each unit is fitted in reference coordinates
-(:func:`demseis.dem.measure.unit_dips`, checked on a kinematic fault with imposed refraction in
-``test_measure.py``). The same runs with uniform mechanics are the control: the dip of a brittle
-fault wanders from unit to unit by itself (per run the control's strong-minus-weak difference
-was -3.7 to +8 deg over three seeds, docs/dem.md), so two seeds are averaged and the contrast
-must beat its own control.
+(:func:`demseis.diagnostics.measure.unit_dips`, checked on a kinematic fault with imposed
+refraction in ``tests/diagnostics/test_measure.py``). The same runs with uniform mechanics are
+the control: the dip of a brittle fault wanders from unit to unit by itself (per run the
+control's strong-minus-weak difference was -3.7 to +8 deg over three seeds, docs/dem.md), so
+two seeds are averaged and the contrast must beat its own control.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from demseis.dem import BRITTLE, NormalFault, build_assembly, settle_pack, simulate
-from demseis.dem.measure import strong_weak_dips
+from demseis.diagnostics.measure import strong_weak_dips
 from demseis.dem.strata import alternation, is_strong, layer_materials
 
 N_LAYERS, UNIT = 24, 2

@@ -12,7 +12,7 @@ from demseis.cli import main
 from demseis.evaluation._kernels import dip_scan_semblance
 from demseis.evaluation.baseline import SemblanceBaseline, semblance_fault_probability
 from demseis.evaluation.scoring import score
-from demseis.testing import faulted_section, ricker_pulse as ricker
+from demseis.diagnostics.toys import faulted_section, ricker_pulse as ricker
 
 
 def _reference_semblance(u, slopes, ht, hs, eps):

@@ -14,7 +14,7 @@ if not hasattr(datasets, "FaultSegDataset"):
     pytest.skip("demseis.datasets.FaultSegDataset is not available", allow_module_level=True)
 pytest.importorskip("torch")
 
-from demseis.testing import faulted_section  # noqa: E402
+from demseis.diagnostics.toys import faulted_section  # noqa: E402
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "train_unet.py"
 

@@ -7,7 +7,7 @@ import math
 import pytest
 
 from demseis.dem import Material
-from demseis.dem.calibrate import biaxial_test, mohr_coulomb_fit
+from demseis.diagnostics.calibrate import biaxial_test, mohr_coulomb_fit
 from demseis.errors import InputError
 
 

@@ -1,4 +1,4 @@
-"""The DEM coverage check (issue 13): jump field against a slow per-cell reference."""
+"""The DEM coverage check: jump field against a slow per-cell reference."""
 
 from __future__ import annotations
 
@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from demseis.errors import InputError
-from demseis.labels.coverage import jump_coverage, jump_field
+from demseis.diagnostics.coverage import jump_coverage, jump_field
 from demseis.labels.maps import rasterise_strain
 from demseis.seismic.raster import rasterise
-from demseis.testing import disk_pack
+from demseis.diagnostics.toys import disk_pack
 from demseis.types import Grid, Snapshot
 
 

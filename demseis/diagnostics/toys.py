@@ -1,4 +1,4 @@
-"""Toy inputs for tests, benchmarks and examples: disk packs and one kinematic normal fault.
+"""Toy inputs for tests, benchmarks and figure scripts: disk packs and one kinematic normal fault.
 
 Nothing here is mechanics: faulting is geometry. One planar normal fault model serves every toy:
 :func:`fault_signed_distance` says which side of the plane a point is on, and
@@ -275,8 +275,8 @@ def faulted_sequence(width_m: float = 5000.0, height_m: float = 2770.0, n_layers
     ``dip_deg`` (it reaches the surface at ``x_fault_m - height_m / tan(dip)``); at every
     increment the hanging wall (decided once, in the undeformed state, with
     :func:`fault_signed_distance`; growth strata included) moves down-dip by the throw increment
-    (:func:`down_dip_vector`, as :func:`kinematic_fault` moves it), and the accommodation below the initial surface is filled with a
-    new growth layer (index ``n_layers + k - 1``, ``deposited=True``, new ids).
+    (:func:`down_dip_vector`, as :func:`kinematic_fault` moves it), and the accommodation below
+    the initial surface is filled with a new growth layer (index ``n_layers + k - 1``, ``deposited=True``, new ids).
     """
     rng = np.random.default_rng(0) if rng is None else rng
     x_fault_m = 0.6 * width_m if x_fault_m is None else x_fault_m

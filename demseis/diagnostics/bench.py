@@ -33,6 +33,7 @@ from __future__ import annotations
 import os
 import shutil
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -44,8 +45,9 @@ from demseis.datasets.store import create_store, finalize_store, write_shard
 from demseis.dem.assembly import Pack, settle_pack
 from demseis.dem.engine import Engine
 from demseis.dem.types import Material
+from demseis.diagnostics.toys import disk_pack, faulted_sequence, kinematic_fault
 from demseis.errors import InputError
-from demseis.labels import LabelConfig, label_maps, strain_history
+from demseis.labels import LabelConfig, displacement_history, label_maps, strain_history
 from demseis.seismic.forward import synthetic_sections
 from demseis.seismic.properties import (
     PropertyModel,
@@ -56,7 +58,6 @@ from demseis.seismic.properties import (
     smooth,
 )
 from demseis.seismic.raster import rasterise
-from demseis.testing import disk_pack, faulted_sequence, kinematic_fault
 from demseis.types import Grid, Snapshot, load_snapshots
 
 SEED_WIDTH_M = 5000.0
@@ -116,7 +117,7 @@ BENCH_MATERIAL = Material(cohesion_n=0.0)
 
 
 def dem_benchmark(xy: np.ndarray, radius: np.ndarray, n_steps: int = 2000,
-              material: Material = BENCH_MATERIAL, warmup_steps: int = 20) -> dict:
+                  material: Material = BENCH_MATERIAL, warmup_steps: int = 20) -> dict:
     """Time ``n_steps`` frictional-model steps on the pack; returns a JSON-able dict.
 
     The kernels are compiled (or loaded from Numba's cache) and warmed by ``warmup_steps``
@@ -157,11 +158,11 @@ def median_ms(fn, repeats: int) -> tuple[float, float]:
 
 
 def seismic_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: int = 7,
-                  freqs_hz: tuple[float, ...] = (20.0, 40.0, 60.0), seed: int = 0,
-                  npz: str | None = None) -> dict:
+                      freqs_hz: tuple[float, ...] = (20.0, 40.0, 60.0), seed: int = 0,
+                      npz: str | None = None) -> dict:
     """Time the render of one faulted toy snapshot (``nx`` x ``nz`` cells of ``cell_m``).
 
-    The snapshot is the last (throw 450 m) of :func:`demseis.testing.faulted_sequence`
+    The snapshot is the last (throw 450 m) of :func:`demseis.diagnostics.toys.faulted_sequence`
     over ``nx cell_m`` x ``nz cell_m`` m (about 11,800 disks at 512 x 288). Timed, as medians
     of ``repeats`` runs after one warm-up (Numba compiled and cached): element properties,
     rasterisation, background fill, smoothing of both grids, the convolution for one frequency
@@ -271,8 +272,6 @@ def labels_benchmark(n_snapshots: int = 6, repeats: int = 5, seed: int = 0) -> d
     snaps = _snapshots(n_snapshots, seed)
     cfg = LabelConfig()
     grid = Grid.covering(5000.0, 2770.0, 10.0)
-    from demseis.labels.traces import displacement_history
-
     hist = strain_history(snaps[:2], cfg)  # JIT warm-up
     label_maps(snaps[1], hist[1], grid, cfg, displacement=displacement_history(snaps[:2])[1])
     t_hist, t_maps = [], []
@@ -343,7 +342,7 @@ class MemmapCrops:
         return self.n
 
     def __getitem__(self, i: int):
-        import torch
+        import torch  # heavy: loaded only by the loader benchmark's workers
 
         if self._arrays is None:
             self._arrays = [np.load(f, mmap_mode="r") for f in self.files]
@@ -393,7 +392,7 @@ def loader_benchmark(
     progress: bool = False,
 ) -> dict:
     """Build the data, time both loaders, return the result dict (one JSON line's worth)."""
-    import torch
+    import torch  # heavy: only this benchmark needs it
     from torch.utils.data import DataLoader, RandomSampler
 
     torch.set_num_threads(1)
@@ -439,8 +438,8 @@ def loader_benchmark(
         for nw in workers:
             kw = dict(batch_size=batch_size, num_workers=nw, persistent_workers=nw > 0)
             zl = DataLoader(ds, sampler=ShardAwareSampler(ds, seed=seed), **kw)
-            ml = DataLoader(mm, sampler=RandomSampler(mm, generator=torch.Generator().manual_seed(seed)),
-                            **kw)
+            order = torch.Generator().manual_seed(seed)
+            ml = DataLoader(mm, sampler=RandomSampler(mm, generator=order), **kw)
             rates, first = _interleaved_rates({"zarr": zl, "memmap": ml}, n, repeats)
             z_rates, m_rates = rates["zarr"], rates["memmap"]
             del zl, ml
@@ -453,8 +452,6 @@ def loader_benchmark(
             result[f"zarr_first_epoch_samples_per_s_w{nw}"] = round(first["zarr"], 1)
             result[f"memmap_first_epoch_samples_per_s_w{nw}"] = round(first["memmap"], 1)
             if progress:
-                import sys
-
                 print(f"workers={nw}: zarr {z_med:.0f}/s, memmap {m_med:.0f}/s", file=sys.stderr)
         return result
     finally:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from demseis.dem import settle_pack
-from demseis.bench import dem_benchmark, load_pack
+from demseis.diagnostics.bench import dem_benchmark, load_pack
 from demseis.errors import InputError
 from demseis.cli import main
 

@@ -4,7 +4,10 @@ A rectangular sample (a settled pack, gravity then switched off) sits between fo
 bottom is fixed, the left/right walls are servo-controlled to hold the confining stress
 sigma3, and the top wall moves down at a constant strain rate after an isotropic
 consolidation. The peak axial stress sigma1 at two or more confinements gives the
-Mohr-Coulomb envelope  sigma1 = 2 c cos(phi) / (1 - sin(phi)) + sigma3 (1 + sin(phi)) / (1 - sin(phi)).
+Mohr-Coulomb envelope
+
+    sigma1 = 2 c cos(phi) / (1 - sin(phi)) + sigma3 (1 + sin(phi)) / (1 - sin(phi)).
+
 Stresses are 2D (force per metre of thickness / wall length, Pa).
 """
 
@@ -96,8 +99,9 @@ def biaxial_test(material: Material = Material(), sigma3_pa: float = 10e6, *,
 
 
 def mohr_coulomb_fit(sigma3_pa, sigma1_pa) -> tuple[float, float]:
-    """Friction angle (deg) and cohesion (Pa) from peak (sigma3, sigma1) pairs (least squares
-    line sigma1 = a + b sigma3, b = (1 + sin phi) / (1 - sin phi), a = 2 c cos phi / (1 - sin phi))."""
+    """Friction angle (deg) and cohesion (Pa) from peak (sigma3, sigma1) pairs: the least-squares
+    line sigma1 = a + b sigma3, b = (1 + sin phi) / (1 - sin phi), a = 2 c cos phi / (1 - sin phi).
+    """
     s3 = np.asarray(sigma3_pa, float)
     s1 = np.asarray(sigma1_pa, float)
     if s3.size < 2:

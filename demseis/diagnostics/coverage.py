@@ -1,12 +1,12 @@
-"""Issue 13's DEM check of a fault label: does it lie where the particles show a jump?
+"""A check of a fault label against the particles: does it lie where they show a jump?
 
-The displacement jump at a cell is computed here from the particles, independently of the
-trace extraction of :mod:`demseis.labels.traces`: the element displacements (since first
-appearance) are rasterised with :func:`demseis.seismic.rasterise` (mean over the disks
-containing the cell centre) and the jump is the largest |u(p + d) - u(p - d)| over the offsets
-d with |d_row|, |d_col| <= ``reach`` cells whose two cells are rock of the same deposition
-cohort (displacements of different cohorts have different references, so their difference is
-not a slip).
+The check measures the labels, so it shares none of their extraction code
+(:mod:`demseis.labels.traces`): the displacement jump at a cell is computed from the particles.
+The element displacements (since first appearance) are rasterised with
+:func:`demseis.seismic.rasterise` (mean over the disks containing the cell centre) and the jump
+is the largest |u(p + d) - u(p - d)| over the offsets d with |d_row|, |d_col| <= ``reach`` cells
+whose two cells are rock of the same deposition cohort (displacements of different cohorts have
+different references, so their difference is not a slip).
 """
 
 from __future__ import annotations
@@ -15,7 +15,8 @@ import numpy as np
 from scipy import ndimage
 
 from demseis.errors import InputError
-from demseis.labels.maps import rasterise_strain
+from demseis.labels import rasterise_strain
+from demseis.seismic import rasterise
 
 
 def jump_field(snapshot, displacement: np.ndarray, birth: np.ndarray, grid,
@@ -33,8 +34,6 @@ def jump_field(snapshot, displacement: np.ndarray, birth: np.ndarray, grid,
     -------
     jump : (nz, nx) float64 (0 where no offset pair is measurable); rock : (nz, nx) bool.
     """
-    from demseis.seismic import rasterise
-
     u, _ = rasterise(snapshot.xy, snapshot.radius, displacement, grid)
     _, owner = rasterise_strain(snapshot.xy, snapshot.radius, np.zeros(snapshot.n), grid)
     rock = owner >= 0
