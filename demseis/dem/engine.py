@@ -43,7 +43,7 @@ def time_step(radius_min_m: float, density_kg_m3: float, kn_n_m: float) -> float
 def validate_material(material: Material) -> None:
     """Raise :class:`InputError` naming the first out-of-range field of ``material``.
 
-    The ranges are the stage domains of :mod:`demseis.parameters` (:meth:`Param.stage`): the
+    The ranges are the stage domains of :mod:`demseis.parameters` (:meth:`demseis.parameters.Param.stage`): the
     physical domain the DEM integrates, wider than the config ranges (which are the stable,
     affordable part of it), so analytic tests can switch gravity or damping off and per-layer
     materials can be softer than a config's.

@@ -25,7 +25,7 @@ def jump_field(snapshot, displacement: np.ndarray, birth: np.ndarray, grid,
 
     Parameters
     ----------
-    snapshot : :class:`demseis.dem.types.Snapshot` (uses ``xy``, ``radius``, ``n``).
+    snapshot : :class:`demseis.types.Snapshot` (uses ``xy``, ``radius``, ``n``).
     displacement : (n, 2) element displacement since first appearance (m).
     birth : (n,) snapshot of each element's first appearance (its cohort).
     grid : :class:`demseis.types.Grid`. reach : half-width (cells) of the offsets.

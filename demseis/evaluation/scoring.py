@@ -759,7 +759,7 @@ class StoreScore:
     counts: SampleCounts
 
     def table(self) -> str:
-        """The aligned text table of :attr:`rows`."""
+        """The aligned text table of ``rows``."""
         return format_table(self.rows)
 
     def summary_line(self) -> str:

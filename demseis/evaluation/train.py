@@ -110,7 +110,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     progress : a progress bar on stderr (tqdm).
     steps : optimiser steps (exactly this many), or
     minutes : a wall-clock budget instead (the number of steps then depends on the machine).
-    split, where, split_fractions : which samples (see :class:`FaultSegDataset`).
+    split, where, split_fractions : which samples (see
+        :class:`demseis.datasets.FaultSegDataset`).
     target : label array learned (``"fault"``).
     crop : square training crop (multiple of 4, at most the section's smaller side).
     batch, base, lr, seed : batch size, U-Net base width, Adam learning rate, seed.

@@ -240,7 +240,7 @@ def warm_numba_cache() -> None:
 
 
 def run_cost(cfg: Config, run: int) -> float:
-    """Relative cost of run ``run`` by its engine (:meth:`Engine.cost`); the sweep starts the
+    """Relative cost of run ``run`` by its engine (:meth:`demseis.generator.engines.Engine.cost`); the sweep starts the
     costliest runs first."""
     return get_engine(cfg.model.engine).cost(cfg, run_params(cfg, run))
 
