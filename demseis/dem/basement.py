@@ -28,7 +28,7 @@ Relative velocities fix the blocks up to one common velocity. The **reference bl
 rest) is the highest translating block at the end of the run (ties: the leftmost): no
 translating basement block rises above its start, so a reverse fault lowers its footwall
 instead of lifting its hanging wall out of the model. For one normal fault this is the
-footwall, today's boundary condition.
+footwall: the fixed footwall base of the NormalFault boundary condition.
 
 Structures (generators of fault lists): :func:`domino` (a synthetic set dipping one way),
 :func:`graben`, :func:`horst`, :func:`half_graben` and :func:`draw_fault_system` (a random

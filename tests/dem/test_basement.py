@@ -62,7 +62,7 @@ def block_displacement(asm_, system, snaps, margin=50.0, depth=80.0):
 
 # ------------------------------------------------------------------ kinematics (analytic)
 
-def test_one_normal_fault_is_todays_boundary_condition():
+def test_one_normal_fault_is_the_NormalFault_boundary_condition():
     m = B.block_kinematics(B.single(400.0, 60.0, 100.0), W)
     d = math.radians(60.0)
     assert m[0].velocity == (0.0, 0.0)

@@ -27,7 +27,7 @@ def test_new_parameters_are_declared_once_with_range_and_doc():
     assert param_codes()["structure"] == p["structure"].choices
 
 
-def test_default_is_todays_single_normal_fault():
+def test_default_is_one_normal_fault_as_a_NormalFault():
     cfg = load_config(preset="quick")
     f = fault_system_of(cfg, plan_run(cfg, 0).params, 0)
     assert isinstance(f, NormalFault)

@@ -21,7 +21,7 @@ def test_relabel_keeps_seismic_bytes_and_changes_labels(tmp_path):
     np.testing.assert_array_equal(a["seismic"][:].view(np.uint32),
                                   b["seismic"][:].view(np.uint32))
     assert a["params/has_fault"][:].sum() > 0
-    assert (a["slip_m"][:] > 0).any() and not (b["slip_m"][:] > 0).any()  # legacy: no slip
+    assert (a["slip_m"][:] > 0).any() and not (b["slip_m"][:] > 0).any()  # strain_band: no slip
     assert main(["validate", str(dst)]) == 0
 
 
