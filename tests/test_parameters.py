@@ -87,7 +87,7 @@ GENERATOR_ONLY = {"seed", "n_runs", "renders_per_snapshot", "fault_x_frac", "n_l
                   # fault systems and mechanical stratigraphy: the generator turns them into a
                   # FaultSystem / per-layer materials, whose own checks are wider
                   "n_faults", "fault_spacing_frac", "listric_radius_m", "strength_contrast",
-                  # the kinematic engine's geometry (demseis.generator.kinematic)
+                  # the kinematic engine's geometry (demseis.generator.engines.kinematic)
                   "fold_amplitude_m", "throw_taper"}
 NUMERIC = sorted(k for k, p in PARAMS.items() if p.kind in (int, float))
 
