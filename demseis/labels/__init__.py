@@ -1,6 +1,7 @@
 """demseis.labels: strain from element displacements; fault, damage-zone, strain and layer labels.
 
-Scoring predictions against labels lives in :mod:`demseis.evaluation`.
+Scoring predictions against labels lives in :mod:`demseis.evaluation`. Code outside this
+package imports from here, not from its modules.
 
 Public API (see docs/labels.md)::
 
@@ -8,20 +9,29 @@ Public API (see docs/labels.md)::
     hist = strain_history(snapshots, config)                 # per snapshot: total, cumulative
     disp = displacement_history(snapshots)                   # per snapshot: (displacement, birth)
     maps = label_maps(snapshot, hist[k], grid, config, displacement=disp[k])
-    # fault, fault_id, slip_m, dip_deg, sense, damage, strain, layer
+    # fault, damage, strain, layer, fault_id, slip_m, dip_deg, sense (demseis.schema's
+    # engine labels)
     facts = sample_facts(maps)                               # has_fault, n_faults, max_slip_m
+
+Shape measures of label masks (diagnostics): :func:`loop_count`, :func:`rung_fraction`,
+:func:`skeleton_length_cells`, :func:`mask_thickness_cells`.
+
+Modules: ``maps`` (label_maps), ``raster`` (elements to grid), ``traces`` (the
+``"slip_trace"`` method: ``crest``, ``slip``, ``linking``, ``core``, with ``direction``),
+``targets`` (per-pixel targets of traces), ``strain_band`` (the ``"strain_band"`` method),
+``masks`` and ``centreline`` (mask tools), ``measures``, ``strain``, ``config``, ``_kernels``.
 """
 
 from demseis.labels.config import LabelConfig
-from demseis.labels.maps import (
-    damage_map,
-    fault_mask,
-    label_maps,
+from demseis.labels.maps import label_maps, sample_facts
+from demseis.labels.measures import (
+    loop_count,
     mask_thickness_cells,
-    rasterise_strain,
-    sample_facts,
-    thin_and_dilate,
+    rung_fraction,
+    skeleton_length_cells,
 )
+from demseis.labels.raster import rasterise_strain
+from demseis.labels.slip import displacement_history
 from demseis.labels.strain import (
     StrainResult,
     StrainState,
@@ -29,7 +39,8 @@ from demseis.labels.strain import (
     neighbour_lists,
     strain_history,
 )
-from demseis.labels.traces import Traces, displacement_history, slip_traces
+from demseis.labels.strain_band import damage_map, fault_mask, thin_and_dilate
+from demseis.labels.traces import Traces, slip_traces
 
 __all__ = [
     "LabelConfig",
@@ -41,10 +52,13 @@ __all__ = [
     "element_strain",
     "fault_mask",
     "label_maps",
+    "loop_count",
     "mask_thickness_cells",
     "neighbour_lists",
     "rasterise_strain",
+    "rung_fraction",
     "sample_facts",
+    "skeleton_length_cells",
     "slip_traces",
     "strain_history",
     "thin_and_dilate",

@@ -334,7 +334,7 @@ def guo_hall_thin(mask, lut1, lut2):
     mask : (nz, nx) uint8, 1 = foreground; not modified; outside the image is background.
     lut1, lut2 : (256,) bool deletion tables of the two subiterations, indexed by the
         neighbour code sum(bit_k << k) with k = 0..7 for E, NE, N, NW, W, SW, S, SE
-        (see :func:`demseis.labels.maps.guo_hall_luts`).
+        (see :func:`demseis.labels.masks.guo_hall_luts`).
 
     Returns
     -------

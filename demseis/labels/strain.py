@@ -223,7 +223,7 @@ def strain_history(
 
     Parameters
     ----------
-    snapshots : sequence of :class:`demseis.dem.types.Snapshot`, in time order, sharing one
+    snapshots : sequence of :class:`demseis.types.Snapshot`, in time order, sharing one
         id space. Elements may appear (deposition) in later snapshots; an element's reference
         is its first appearance.
     config : neighbour method/size and ``min_neighbours`` (default :class:`LabelConfig`).

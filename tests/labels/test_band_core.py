@@ -10,19 +10,18 @@ from scipy import ndimage
 
 from demseis.errors import ConfigError
 from demseis.labels import LabelConfig
-from demseis.labels.traces import (
+from demseis.labels.core import (
     CORE_HOLE_CELLS,
     CORE_MIN_EXTENT_CELLS,
     CORE_SIGMA_CELLS,
-    DIRECTION_WINDOW,
     band_core,
-    fill_small_holes,
-    local_direction,
-    shear_field,
 )
+from demseis.labels.crest import shear_field
+from demseis.labels.direction import DIRECTION_WINDOW, local_direction
+from demseis.labels.masks import fill_small_holes
 from demseis.testing import disk_pack, kinematic_fault
 
-from .test_traces import CELL, H, W, XF, centres, labels_of, planar_line
+from ._helpers import CELL, H, W, XF, centres, labels_of, planar_line
 
 
 def _band_core_ref(trace, t_r, t_c, field, rock, cohort, max_halfwidth, fraction=0.5):
@@ -132,12 +131,12 @@ def test_fill_small_holes():
     mask[30:33, 12:15] = False  # a notch at the edge
     rock = np.ones(mask.shape, bool)
     rock[9, 9] = False
-    got = fill_small_holes(mask, rock, CORE_HOLE_CELLS)
+    got = fill_small_holes(mask, CORE_HOLE_CELLS, rock)
     assert (got & ~mask).sum() == 3 and got[8:10, 8:10].sum() == 3 and not got[9, 9]
     assert not got[20:25, 8:11].any() and not got[30:33, 12:15].any()
     assert 4 <= CORE_HOLE_CELLS < 15
-    assert (fill_small_holes(mask, rock, 0) == mask).all()
-    assert (fill_small_holes(mask, rock, 15) & ~mask).sum() == 18
+    assert (fill_small_holes(mask, 0, rock) == mask).all()
+    assert (fill_small_holes(mask, 15, rock) & ~mask).sum() == 18
 
 
 def test_fault_core_of_a_sharp_planar_fault_is_its_trace():
@@ -161,9 +160,8 @@ def test_fault_core_of_a_sharp_planar_fault_is_its_trace():
 def test_fault_core_of_a_shear_zone_spans_it(seed, dip):
     """A 120 m (12-cell) wide zone of simple shear carrying 250 m (kinematic_fault's
     zone_width_m), scored where both walls face each other: the fault mask is a line, the fault
-    core covers most of the zone and stays in it. Measured at the time of writing: zone
-    covered 0.77-0.83 by the core (0.12-0.16 by the line), 0.3-2.4 % of core cells more than
-    1.5 cells outside the zone."""
+    core covers most of the zone and stays in it. Measured: zone covered 0.77-0.83 by the core
+    (0.12-0.16 by the line), 0.3-2.4 % of core cells more than 1.5 cells outside the zone."""
     xy, r = disk_pack(W, H, np.random.default_rng(seed))
     slip, zone = 250.0, 120.0
     cur = kinematic_fault(xy, x_m=XF, dip_deg=dip, slip_m=slip, zone_width_m=zone)

@@ -7,7 +7,8 @@ import pytest
 
 from demseis.types import Snapshot
 from demseis.errors import ConfigError, InputError
-from demseis.labels import LabelConfig, strain_history
+from demseis.labels import LabelConfig, element_strain, strain_history
+from demseis.testing import kinematic_fault
 
 
 def gss(g):
@@ -111,9 +112,6 @@ def test_history_errors(pack_small):
 
 def test_history_with_lost_elements_matches_direct_fit(pack_small):
     """Elements missing from a later snapshot: the rest is fitted against the common set."""
-    from demseis.labels import element_strain
-    from demseis.testing import kinematic_fault
-
     xy, r = pack_small
     n = xy.shape[0]
     cur1 = kinematic_fault(xy, x_m=500.0, dip_deg=60.0, slip_m=40.0, zone_width_m=80.0)

@@ -11,6 +11,7 @@ from demseis.types import Snapshot
 from demseis.errors import ConfigError, InputError
 from demseis.labels import (
     LabelConfig,
+    displacement_history,
     element_strain,
     label_maps,
     mask_thickness_cells,
@@ -18,7 +19,9 @@ from demseis.labels import (
     strain_history,
     thin_and_dilate,
 )
-from demseis.labels.maps import skeletonize
+from demseis.labels.centreline import prune_spurs
+from demseis.labels.masks import skeletonize
+from demseis.schema import SAMPLE_ARRAYS, SampleArray, engine_labels, sample_array
 from demseis.testing import fault_signed_distance, kinematic_fault
 from demseis.types import Grid
 from demseis.seismic.raster import rasterise
@@ -75,8 +78,6 @@ def test_kinematic_fault_mask_lies_on_the_line(pack_fault, dip, slip):
 
 
 def test_prune_keeps_the_line_end_and_drops_side_spurs():
-    from demseis.labels.centreline import prune_spurs
-
     sk = np.zeros((40, 80), dtype=bool)
     sk[20, 5:60] = True  # main line, 55 cells
     for k in range(1, 9):  # side spur off the middle: 8 cells up-right from (20, 30)
@@ -196,7 +197,7 @@ def test_label_maps_accepts_strain_state_and_is_deterministic(pack_small):
 
 
 def test_skeleton_matches_scikit_image_thin():
-    from skimage.morphology import thin
+    from skimage.morphology import thin  # optional dev dependency, heavy to import
 
     rng = np.random.default_rng(0)
     for _ in range(10):
@@ -245,3 +246,33 @@ def test_thin_bands_survive_thinning():
     line = thin_and_dilate(m, 1.0)
     assert line.sum() >= 25
     assert mask_thickness_cells(m) == pytest.approx(np.sqrt(2), rel=0.25)
+
+
+@pytest.mark.parametrize("method", ["slip_trace", "strain_band"])
+def test_label_maps_gives_the_schema_engine_labels(pack_small, method):
+    """Both methods give every engine label of demseis.schema, in store order and dtype, with
+    and without a fault."""
+    xy, r = pack_small
+    grid = Grid.covering(800.0, 500.0, 10.0)
+    for cur in (xy, kinematic_fault(xy, x_m=500.0, dip_deg=60.0, slip_m=80.0)):
+        snaps = [snap_of(xy, r, index=0), snap_of(cur, r, index=1)]
+        maps = label_maps(snaps[1], strain_history(snaps)[1], grid, LabelConfig(method=method),
+                          displacement=displacement_history(snaps)[1])
+        assert tuple(maps) == engine_labels()
+        for name, a in maps.items():
+            assert a.dtype == sample_array(name).np_dtype and a.shape == grid.shape, name
+        assert maps["fault"].any() == (cur is not xy)
+
+
+def test_label_maps_fails_on_an_engine_label_it_does_not_make(pack_small):
+    xy, r = pack_small
+    grid = Grid.covering(800.0, 500.0, 10.0)
+    snaps = [snap_of(xy, r, index=0), snap_of(xy, r, index=1)]
+    hist, disp = strain_history(snaps), displacement_history(snaps)
+    extra = SampleArray("throw_m", "float32", "label", "m", "throw of the nearest fault")
+    with SAMPLE_ARRAYS.registered("throw_m", extra):  # no producer: an engine label
+        for method in ("slip_trace", "strain_band"):
+            with pytest.raises(InputError, match=r"missing \['throw_m'\]"):
+                label_maps(snaps[1], hist[1], grid, LabelConfig(method=method),
+                           displacement=disp[1])
+    assert "throw_m" not in label_maps(snaps[1], hist[1], grid, displacement=disp[1])

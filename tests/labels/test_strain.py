@@ -7,7 +7,7 @@ import pytest
 
 from demseis.errors import InputError
 from demseis.labels import element_strain, neighbour_lists
-from demseis.testing import kinematic_fault
+from demseis.testing import fault_signed_distance, kinematic_fault
 
 
 def gamma_simple_shear(g: float) -> float:
@@ -107,7 +107,7 @@ def test_kernel_matches_slow_numpy_reference(pack_small, method):
 
 
 def test_knn_matches_scikit_learn(pack_small):
-    from sklearn.neighbors import NearestNeighbors
+    from sklearn.neighbors import NearestNeighbors  # optional dev dependency, heavy to import
 
     xy, r = pack_small
     off, idx = neighbour_lists(xy, r, method="knn", k=8)
@@ -120,8 +120,6 @@ def test_knn_matches_scikit_learn(pack_small):
 def test_shear_zone_interior_is_simple_shear(pack_small):
     # a 200 m wide band of simple shear gamma = slip / width; interior elements see it exactly
     xy, r = pack_small
-    from demseis.testing import fault_signed_distance
-
     cur = kinematic_fault(xy, x_m=600.0, dip_deg=60.0, slip_m=100.0, zone_width_m=200.0)
     res = element_strain(xy, cur, r)
     d = fault_signed_distance(xy, 600.0, 60.0)

@@ -1,4 +1,4 @@
-"""Slip-trace labels (demseis.labels.traces) on kinematic faults of known geometry and slip.
+"""Slip-trace labels (the ``"slip_trace"`` method, demseis.labels.traces) on kinematic faults of known geometry and slip.
 
 Metrics are on the raster: the true trace is rasterised as the cells it passes through (cell
 centre within half a cell, measured along the worse grid axis, of the line); a fault cell is
@@ -13,56 +13,28 @@ import pytest
 from scipy import ndimage
 
 from demseis.errors import ConfigError, InputError
-from demseis.labels import LabelConfig, label_maps, strain_history
-from demseis.labels import _kernels
-from demseis.labels.maps import sample_facts
+from demseis.labels import (
+    LabelConfig,
+    _kernels,
+    displacement_history,
+    label_maps,
+    loop_count,
+    rung_fraction,
+    sample_facts,
+)
+from demseis.labels.direction import local_direction
+from demseis.labels.linking import trace_instances
 from demseis.testing import (
     disk_pack,
     fault_signed_distance,
     kinematic_fault,
     listric_fault,
 )
-from demseis.labels.traces import (
-    displacement_history,
-    local_direction,
-    loop_count,
-    rung_fraction,
-    trace_instances,
-)
 from demseis.types import Grid, Snapshot
 
-W, H, XF, CELL = 2000.0, 1000.0, 1200.0, 10.0
+from ._helpers import CELL, H, W, XF, centres, labels_of, planar_line, snap_of
+
 _NINE = np.ones((3, 3), dtype=bool)
-
-
-def snap_of(xy, r, index):
-    n = xy.shape[0]
-    return Snapshot(index, index, 0.0, np.arange(n, dtype=np.int64), xy, r,
-                    np.zeros(n, np.int16), np.zeros(n, bool))
-
-
-def labels_of(xy, cur, r, config=None, grid=None):
-    grid = grid or Grid.covering(W, H, CELL)
-    cfg = config or LabelConfig()
-    snaps = [snap_of(xy, r, 0), snap_of(cur, r, 1)]
-    hist = strain_history(snaps, cfg)
-    disp = displacement_history(snaps)
-    return label_maps(snaps[1], hist[1], grid, cfg, displacement=disp[1]), grid
-
-
-def centres(grid):
-    zz, xx = np.meshgrid(grid.y_centres(), grid.x_centres(), indexing="ij")
-    return xx, zz
-
-
-def planar_line(grid, dip, x_m=XF, direction="right"):
-    """(distance of every cell centre to the plane in cells, rasterised trace)."""
-    xx, zz = centres(grid)
-    d = np.abs(fault_signed_distance(np.column_stack([xx.ravel(), zz.ravel()]), x_m, dip,
-                                     direction)).reshape(xx.shape) / grid.cell_m
-    th = np.radians(dip)
-    half = 0.5 * (abs(np.cos(th)) + abs(np.sin(th)))
-    return d, d <= half
 
 
 def raster_scores(fault, line, region):
@@ -222,10 +194,10 @@ PLANAR = [(dip, slip, x_m, side) for dip in (35.0, 50.0, 65.0, 75.0) for slip in
 
 def test_planar_faults_trace_on_the_line_with_their_slip(packs):
     """32 cases (4 dips x 2 slips x 2 dip directions x 2 packs), scored where both walls face
-    each other and more than 5 cells above the grid's base. Measured at the time of writing:
-    on-line share 1.000 in 30 cases, min 0.940; covered median 0.99, 27 / 32 cases >= 0.95,
-    min 0.899 (where the rasterised displacement step itself bulges 1-2 cells off the plane for
-    ~10 cells; the trace follows the step)."""
+    each other and more than 5 cells above the grid's base. Measured: on-line share 1.000 in
+    30 cases, min 0.940; covered median 0.99, 27 / 32 cases >= 0.95, min 0.899 (where the
+    rasterised displacement step itself bulges 1-2 cells off the plane for ~10 cells; the trace
+    follows the step)."""
     on, cov = [], []
     for xy, r in packs:
         for dip, slip, x_m, side in PLANAR:
@@ -338,9 +310,9 @@ def test_two_crossing_faults_get_different_ids(packs):
 def test_two_slip_surfaces_of_one_zone_are_both_traced(packs):
     """A zone of two rigid 60 m steps 60 m apart (6 cells, like the grain-boundary slips side by
     side in a DEM shear band): with strands both surfaces are labelled with their own slip and
-    one fault id; single traces (strand_sigma_cells = 0) draw one line between them. Measured at
-    the time of writing (gap 60 m, dips 50 and 65 deg, 2 packs): covered 0.55-0.95 per surface
-    with strands, at most 0.23 without; slip on each surface 60.0 m."""
+    one fault id; single traces (strand_sigma_cells = 0) draw one line between them. Measured
+    (gap 60 m, dips 50 and 65 deg, 2 packs): covered 0.55-0.95 per surface with strands, at
+    most 0.23 without; slip on each surface 60.0 m."""
     for xy, r in packs:
         for dip in (50.0, 65.0):
             gap = 60.0

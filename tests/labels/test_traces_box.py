@@ -1,20 +1,17 @@
-"""The box and Gaussian filters of demseis.labels.traces run on the bounding box of their mask
-(``_support``): same bits at the cells that are used as the whole-grid filters. The reference
-is the same code with ``_support`` returning the whole grid (what it ran before)."""
+"""The box and Gaussian filters of the slip-trace modules run on the bounding box of their mask
+(:func:`demseis.labels.direction.box_support`): same bits at the cells that are used as the
+whole-grid filters. The reference is the same code with ``box_support`` returning the whole
+grid."""
 
 from __future__ import annotations
+
+import sys
 
 import numpy as np
 import pytest
 
-from demseis.labels import traces
-from demseis.labels.traces import (
-    _along_trace_mean,
-    _support,
-    local_direction,
-    project_on_local_line,
-    shear_field,
-)
+from demseis.labels.crest import project_on_local_line, shear_field
+from demseis.labels.direction import along_trace_mean, box_support, local_direction
 
 
 def _whole_grid(mask, size):
@@ -22,8 +19,13 @@ def _whole_grid(mask, size):
 
 
 def _on_whole_grid(monkeypatch, fn, *args):
+    """``fn(*args)`` with ``box_support`` giving the whole grid in every labels module using it."""
+    users = [m for name, m in list(sys.modules.items()) if name.startswith("demseis.labels.")
+             and getattr(m, "box_support", None) is box_support]
+    assert len(users) >= 2  # direction and crest at least
     with monkeypatch.context() as mp:
-        mp.setattr(traces, "_support", _whole_grid)
+        for m in users:
+            mp.setattr(m, "box_support", _whole_grid)
         return fn(*args)
 
 
@@ -57,17 +59,17 @@ def test_box_filters_on_the_support_equal_the_whole_grid_to_the_bit(seed, monkey
                                                             m, shift, 7))
     values = rng.normal(0, 3.0, m.shape)
     ok = rng.random(m.shape) < 0.7
-    got = _along_trace_mean(m, values, ok)
-    ref = _on_whole_grid(monkeypatch, _along_trace_mean, m, values, ok)
+    got = along_trace_mean(m, values, ok)
+    ref = _on_whole_grid(monkeypatch, along_trace_mean, m, values, ok)
     assert got[m].tobytes() == ref[m].tobytes() and np.isfinite(got[m & ok]).all()
 
 
 def test_support_is_the_grown_bounding_box():
     m = np.zeros((50, 60), bool)
-    assert _support(m, 9) is None
+    assert box_support(m, 9) is None
     m[10, 20] = m[30, 58] = True
-    assert _support(m, 9) == (slice(5, 36), slice(15, 60))
-    assert _support(np.ones((5, 6), bool), 9) == (slice(0, 5), slice(0, 6))
+    assert box_support(m, 9) == (slice(5, 36), slice(15, 60))
+    assert box_support(np.ones((5, 6), bool), 9) == (slice(0, 5), slice(0, 6))
 
 
 @pytest.mark.parametrize("seed", range(8))

@@ -11,18 +11,22 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from demseis.labels import label_maps, strain_history
+from demseis.generator.config import load_config
+from demseis.generator.pipeline import grid_of, simulate_run
+from demseis.generator.sampling import plan_run
+from demseis.labels import (
+    displacement_history,
+    label_maps,
+    loop_count,
+    rung_fraction,
+    sample_facts,
+    strain_history,
+)
 from demseis.labels.coverage import jump_coverage, jump_field
-from demseis.labels.maps import sample_facts
-from demseis.labels.traces import displacement_history, loop_count, rung_fraction
 
 
 @pytest.fixture(scope="module")
 def quick_run():
-    from demseis.generator.config import load_config
-    from demseis.generator.pipeline import grid_of, simulate_run
-    from demseis.generator.sampling import plan_run
-
     cfg = load_config(None, preset="quick")
     snaps, _ = simulate_run(cfg, plan_run(cfg, 0))
     return cfg, grid_of(cfg), snaps
@@ -30,14 +34,13 @@ def quick_run():
 
 @pytest.mark.slow
 def test_quick_dem_run_labels(quick_run):
-    """Measured at the time of writing (quick run 0, snapshots 1-3): rungs 0.000-0.004, 8 loops
-    (the count is reported, not bounded; what is asserted is that every loop is a lens whose
-    cells all slip). Of the cells whose jump is >= 2 x min_slip_m, 0.633 lie within 2 cells of
-    a 1-cell label (0.481 with single-scale traces, strand_sigma_cells = 0: the DEM's shear
-    zones slip on several particle boundaries side by side). Issue 13 asks for 0.9; the true
-    plane of a rigid kinematic fault reaches only 0.71-0.87 under the same definition (median
-    0.80, benchmarks/labels_dem_coverage.py --kinematic), so 0.9 is out of reach of a one-cell
-    line. The guard keeps 0.05 of margin.
+    """On quick run 0, snapshots 1-3: rungs 0.000-0.004, 8 loops (the count is reported, not
+    bounded; what is asserted is that every loop is a lens whose cells all slip). Of the cells
+    whose jump is >= 2 x min_slip_m, 0.633 lie within 2 cells of a 1-cell label (0.481 with
+    single-scale traces, strand_sigma_cells = 0: the DEM's shear zones slip on several particle
+    boundaries side by side). A share of 0.9 is out of reach of a one-cell line: the true plane
+    of a rigid kinematic fault reaches only 0.71-0.87 under the same definition (median 0.80,
+    benchmarks/labels_dem_coverage.py --kinematic). The guard keeps 0.05 of margin.
 
     The fault core (``damage`` class 2: the fault mask and the shear band's core around it)
     is where the particles' jumps are: 0.893 of the high-jump cells lie within 2 cells of it
