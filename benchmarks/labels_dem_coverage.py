@@ -107,7 +107,7 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
     from demseis.generator.layout import grid_of
     from demseis.labels import label_maps, strain_history
     from demseis.diagnostics.coverage import jump_coverage, jump_field
-    from demseis.labels.traces import displacement_history, loop_count, rung_fraction
+    from demseis.labels import displacement_history, loop_count, rung_fraction
 
     cfg = load_config(None, preset=preset)
     grid = grid_of(cfg)
@@ -158,7 +158,7 @@ def ab_timing(preset: str, run: int, cache: str | None, repeats: int = 3) -> dic
     from demseis.generator.config import load_config
     from demseis.generator.layout import grid_of
     from demseis.labels import label_maps, strain_history
-    from demseis.labels.traces import displacement_history
+    from demseis.labels import displacement_history
 
     cfg = load_config(None, preset=preset)
     grid = grid_of(cfg)
@@ -189,7 +189,7 @@ def kinematic(metric: str = "euclidean") -> dict:
     kinematic faults."""
     from demseis.labels import LabelConfig, label_maps, strain_history
     from demseis.diagnostics.coverage import jump_coverage, jump_field
-    from demseis.labels.traces import displacement_history
+    from demseis.labels import displacement_history
     from demseis.diagnostics.toys import disk_pack, fault_signed_distance, kinematic_fault
     from demseis.types import Grid, Snapshot
 

@@ -49,7 +49,7 @@ def main() -> None:
     from matplotlib.colors import ListedColormap
 
     from demseis.labels import LabelConfig, label_maps, strain_history
-    from demseis.labels.maps import skeleton_length_cells
+    from demseis.labels import skeleton_length_cells
     from demseis.types import Grid
     from demseis.seismic import (
         PropertyModel,
@@ -59,7 +59,7 @@ def main() -> None:
         synthetic_sections,
     )
 
-    from demseis.labels.traces import displacement_history, loop_count, rung_fraction
+    from demseis.labels import displacement_history, loop_count, rung_fraction
 
     snaps = _snapshots(args.snapshots)
     if args.save_snapshots:

@@ -7,7 +7,7 @@ import pytest
 
 from demseis.errors import InputError
 from demseis.diagnostics.coverage import jump_coverage, jump_field
-from demseis.labels.maps import rasterise_strain
+from demseis.labels import rasterise_strain
 from demseis.seismic.raster import rasterise
 from demseis.diagnostics.toys import disk_pack
 from demseis.types import Grid, Snapshot

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from demseis.labels import LabelConfig, displacement_history, label_maps, strain_history
-from demseis.testing import fault_signed_distance
+from demseis.diagnostics.toys import fault_signed_distance
 from demseis.types import Grid, Snapshot
 
 W, H, XF, CELL = 2000.0, 1000.0, 1200.0, 10.0

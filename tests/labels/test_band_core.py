@@ -19,7 +19,7 @@ from demseis.labels.core import (
 from demseis.labels.crest import shear_field
 from demseis.labels.direction import DIRECTION_WINDOW, local_direction
 from demseis.labels.masks import fill_small_holes
-from demseis.testing import disk_pack, kinematic_fault
+from demseis.diagnostics.toys import disk_pack, kinematic_fault
 
 from ._helpers import CELL, H, W, XF, centres, labels_of, planar_line
 

@@ -8,7 +8,7 @@ import pytest
 from demseis.types import Snapshot
 from demseis.errors import ConfigError, InputError
 from demseis.labels import LabelConfig, element_strain, strain_history
-from demseis.testing import kinematic_fault
+from demseis.diagnostics.toys import kinematic_fault
 
 
 def gss(g):

@@ -22,7 +22,7 @@ from demseis.labels import (
 from demseis.labels.centreline import prune_spurs
 from demseis.labels.masks import skeletonize
 from demseis.schema import SAMPLE_ARRAYS, SampleArray, engine_labels, sample_array
-from demseis.testing import fault_signed_distance, kinematic_fault
+from demseis.diagnostics.toys import fault_signed_distance, kinematic_fault
 from demseis.types import Grid
 from demseis.seismic.raster import rasterise
 

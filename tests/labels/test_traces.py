@@ -24,7 +24,7 @@ from demseis.labels import (
 )
 from demseis.labels.direction import local_direction
 from demseis.labels.linking import trace_instances
-from demseis.testing import (
+from demseis.diagnostics.toys import (
     disk_pack,
     fault_signed_distance,
     kinematic_fault,

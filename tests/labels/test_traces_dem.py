@@ -1,8 +1,8 @@
 """Slip-trace labels on a DEM run of the ``quick`` preset (slow: runs the DEM, ~10-30 s).
 
 The displacement jump at a cell is computed from the particles, independently of the trace
-extraction, by :func:`demseis.labels.coverage.jump_field` (tested against a slow reference in
-tests/labels/test_coverage.py).
+extraction, by :func:`demseis.diagnostics.coverage.jump_field` (tested against a slow reference in
+tests/diagnostics/test_coverage.py).
 """
 
 from __future__ import annotations
@@ -12,7 +12,8 @@ import pytest
 from scipy import ndimage
 
 from demseis.generator.config import load_config
-from demseis.generator.pipeline import grid_of, simulate_run
+from demseis.generator.engines import get_engine
+from demseis.generator.layout import grid_of
 from demseis.generator.sampling import plan_run
 from demseis.labels import (
     displacement_history,
@@ -22,13 +23,13 @@ from demseis.labels import (
     sample_facts,
     strain_history,
 )
-from demseis.labels.coverage import jump_coverage, jump_field
+from demseis.diagnostics.coverage import jump_coverage, jump_field
 
 
 @pytest.fixture(scope="module")
 def quick_run():
     cfg = load_config(None, preset="quick")
-    snaps, _ = simulate_run(cfg, plan_run(cfg, 0))
+    snaps = list(get_engine("dem").simulate(cfg, plan_run(cfg, 0)).snapshots)
     return cfg, grid_of(cfg), snaps
 
 
