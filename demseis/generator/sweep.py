@@ -232,7 +232,6 @@ def warm_numba_cache() -> None:
     from demseis.generator.config import load_config
 
     raw_cfg = load_config(preset="tiny").to_dict()
-    raw_cfg["model"]["engine"] = "dem"
     raw_cfg["sweep"].update(n_runs=1, n_layers=2, throw_m=20.0, dip_deg=60.0)
     # 1 m/s: the run outlasts one damping relaxation time (demseis.generator.physics)
     raw_cfg["model"].update(n_snapshots=2, width_m=300.0, height_m=200.0, wall_speed_m_s=1.0)
