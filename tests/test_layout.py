@@ -44,34 +44,7 @@ def _part(module: str) -> str:
 
 def _imports(path: Path) -> list[tuple[str, list[str], int]]:
     """(module, imported names, line) of every import in ``path``, relative ones resolved."""
-    rel = path.relative_to(ROOT).with_suffix("")
-    pkg_parts = list(rel.parts[:-1]) if rel.name != "__init__" else list(rel.parts[:-1])
-    out = []
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
-        if isinstance(node, ast.Import):
-            out += [(a.name, [], node.lineno) for a in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = pkg_parts[: len(pkg_parts) - node.level + 1]
-                mod = ".".join(base + ([node.module] if node.module else []))
-            else:
-                mod = node.module or ""
-            out.append((mod, [a.name for a in node.names], node.lineno))
-    return out
-
-
-def _module_level_import_lines(path: Path) -> set[int]:
-    """Lines of the imports that run when ``path`` is imported (not inside a function)."""
-    lines: set[int] = set()
-    stack = list(ast.parse(path.read_text(), str(path)).body)
-    while stack:
-        node = stack.pop()
-        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
-            continue
-        if isinstance(node, (ast.Import, ast.ImportFrom)):
-            lines.add(node.lineno)
-        stack.extend(ast.iter_child_nodes(node))
-    return lines
+    return _imports_in(path, ROOT)
 
 
 def _module_files() -> list[Path]:
@@ -236,6 +209,8 @@ def import_graph(root: Path = ROOT) -> dict[str, set[str]]:
 
 def _imports_in(path: Path, root: Path,
                 top_level_only: bool = False) -> list[tuple[str, list[str], int]]:
+    """(module, imported names, line) of every import in ``path`` (only the module-level ones
+    with ``top_level_only``), relative ones resolved against ``root``."""
     rel = path.relative_to(root).with_suffix("")
     pkg_parts = list(rel.parts[:-1])
     out = []
