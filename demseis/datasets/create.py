@@ -297,7 +297,7 @@ def create_store(
 def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.ndarray]]:
     """Row dimension name and coordinate values of the sample axes, from the ``grid`` attr.
 
-    Cell centres as :class:`demseis.seismic.grid.Grid` defines them: ``x = x0_m + (j + 0.5)
+    Cell centres as :class:`demseis.types.Grid` defines them: ``x = x0_m + (j + 0.5)
     cell_m``, depth below the top ``(i + 0.5) cell_m``; time-domain stores (``domain = "time"``)
     have rows ``twt = k dt_s`` (the axis of :func:`demseis.seismic.time_axis`). No coordinates
     when the attr is absent or does not match the sample shape.
