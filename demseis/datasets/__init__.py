@@ -5,8 +5,11 @@ per shard: :func:`write_shard`), resuming (:func:`shard_status`, :func:`stored_c
 (:func:`open_store`, :func:`read_store_attrs`, :func:`read_particles`, :func:`read_sample`,
 :class:`FaultSegDataset`, :class:`ShardAwareSampler`, :func:`to_xarray`), checking
 (:func:`validate_store`, :func:`damaged_shards`) and the writer lock (:func:`writer_lock`).
-The layout is documented in ``docs/store.md``. Importing this package imports neither torch nor
-xarray.
+The sample arrays a store may hold are declared in :mod:`demseis.schema`. Modules: ``layout``
+(version, shape, metadata checks, opening), ``create``, ``write`` (one shard), ``particles``,
+``status`` (done flags, failures, finalisation), ``integrity`` (checksums), ``validate``,
+``dataset``, ``read``, ``xarray_io`` and ``lock``. The on-disk layout is documented in
+``docs/store.md``. Importing this package imports neither torch, xarray nor zarr.
 """
 
 from demseis.datasets.dataset import (
@@ -18,39 +21,29 @@ from demseis.datasets.dataset import (
 )
 from demseis.datasets.integrity import damaged_shards, shard_damage
 from demseis.datasets.lock import StoreLock, writer_lock
-from demseis.datasets.store import (
-    DEFAULT_ARRAYS,
-    LABEL_RANGES,
-    SAMPLE_ARRAY_SPECS,
-    SAMPLE_ARRAYS,
+from demseis.datasets.create import ParamSpec, create_store
+from demseis.datasets.layout import (
     SCHEMA_VERSION,
-    ArraySpec,
-    ParamSpec,
     StoreLayout,
-    create_store,
-    finalize_store,
     open_store,
     read_layout,
-    read_particles,
     read_store_attrs,
+    store_layout,
+    stored_config,
+)
+from demseis.datasets.particles import read_particles, write_particles
+from demseis.datasets.status import (
+    finalize_store,
     record_failures,
     remove_partial_writes,
     shard_status,
-    store_layout,
-    stored_config,
-    write_particles,
-    write_shard,
 )
 from demseis.datasets.validate import ValidationReport, validate_store
+from demseis.datasets.write import write_shard
 from demseis.datasets.xarray_io import to_xarray
 
 __all__ = [
-    "DEFAULT_ARRAYS",
-    "LABEL_RANGES",
-    "SAMPLE_ARRAY_SPECS",
-    "SAMPLE_ARRAYS",
     "SCHEMA_VERSION",
-    "ArraySpec",
     "FaultSegDataset",
     "ParamSpec",
     "Sample",

@@ -37,7 +37,7 @@ from typing import Any, NamedTuple
 
 import google_crc32c
 import numpy as np
-from numcodecs import blosc
+from numcodecs import Zstd, blosc
 
 from demseis.errors import StoreError
 
@@ -393,8 +393,6 @@ def _blosc_step(conf: Mapping[str, Any]) -> Callable[[bytes], bytes]:
 
 def _zstd_step(conf: Mapping[str, Any]) -> Callable[[bytes], bytes]:
     """zarr's ``zstd`` codec: numcodecs ``Zstd`` with the stored configuration."""
-    from numcodecs import Zstd
-
     return Zstd(level=int(conf.get("level", 0)), checksum=bool(conf.get("checksum", False))).encode
 
 

@@ -7,6 +7,7 @@ Neither class imports torch at module import time, and neither subclasses torch'
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,13 +17,8 @@ import numpy as np
 from numcodecs import blosc
 
 from demseis.datasets._shardio import RawShardReader, raw_shard_layout
-from demseis.datasets.store import (
-    SAMPLE_ARRAYS,
-    fill_value_for,
-    open_store,
-    shard_status,
-    store_layout,
-)
+from demseis.datasets.layout import fill_value_for, open_store, store_layout
+from demseis.datasets.status import shard_status
 from demseis.errors import InputError, StoreError
 
 SPLITS = ("train", "val", "test")
@@ -67,8 +63,6 @@ _MASK64 = (1 << 64) - 1
 
 def _in_dataloader_worker() -> bool:
     """True inside a torch DataLoader worker process (torch is then already imported)."""
-    import sys
-
     data = sys.modules.get("torch.utils.data")
     return bool(data is not None and data.get_worker_info() is not None)
 
@@ -461,7 +455,7 @@ class FaultSegDataset:
         ys = {}
         for n in self.targets:
             v = data[n][m]
-            if SAMPLE_ARRAYS[n].kind in "iu":
+            if self.layout.arrays[n].kind in "iu":
                 v = v.astype(np.int64) if self.long_labels else v
             else:
                 v = v.astype(np.float32, copy=False)

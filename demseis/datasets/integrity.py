@@ -4,7 +4,7 @@ Every chunk of a schema-2 store ends with the crc32c of its encoded bytes (zarr'
 codec, the last codec of every array), and every shard file ends with a checksummed index.
 These functions verify those checksums straight from the files, without decoding: a done shard
 costs one read of its bytes. ``validate`` reports what they find, a resumed sweep rewrites the
-damaged shards (:func:`demseis.datasets.shard_status` with ``verify=True``), and the readers
+damaged shards (:func:`demseis.datasets.status.shard_status` with ``verify=True``), and the readers
 (:class:`~demseis.datasets.FaultSegDataset`, :func:`~demseis.datasets.read_sample`) check the
 same checksums on the chunks they read (the loader once per chunk and reader, again when the
 shard file changes: :class:`~demseis.datasets._shardio.RawShardReader`).
@@ -17,15 +17,16 @@ from pathlib import Path
 import numpy as np
 
 from demseis.datasets._shardio import CRC_NBYTES, check_chunk_file, check_shard_file, crc_ok
-from demseis.datasets.store import PARTICLE_FIELDS, _particle_group_name, open_store, store_layout
+from demseis.datasets.layout import open_store, store_layout
+from demseis.datasets.particles import PARTICLE_FIELDS, particle_group_name
 
 
 def read_done_flags(path: str | Path, n_shards: int, array=None) -> tuple[np.ndarray, list[int]]:
     """Done flags read from the ``shard_done`` chunk files, with their checksums checked.
 
     ``array`` (the open ``shard_done`` array, optional): when its codecs do not end in
-    ``crc32c`` (a store assembled by hand, not by :func:`create_store`), it is read through
-    zarr instead, unchecked.
+    ``crc32c`` (a store assembled by hand, not by
+    :func:`~demseis.datasets.create.create_store`), it is read through zarr instead, unchecked.
 
     Returns
     -------
@@ -105,7 +106,7 @@ def shard_damage(path: str | Path, k: int, group=None, layout=None) -> list[str]
         elif name == "run_id":
             ids = np.unique(group["params"]["run_id"][s0: s0 + s])
             run_id = int(ids[0]) if ids.size == 1 else k
-    run_dir = path / _particle_group_name(run_id)
+    run_dir = path / particle_group_name(run_id)
     if (run_dir / "zarr.json").is_file():
         for name in PARTICLE_FIELDS:
             f = run_dir / name / "c" / "0"

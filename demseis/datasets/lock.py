@@ -1,10 +1,11 @@
 """The writer lock of a demseis store: one writing command at a time.
 
 Every command that writes a store (``generate``, ``render`` into a store, anything that calls
-:func:`create_store` as the driver) holds :func:`writer_lock` for its whole run. The lock is a
-small JSON file **beside** the store, ``<store>.lock`` (for ``out/t.zarr``: ``out/t.zarr.lock``),
-not inside it: zarr lists every entry of a store directory and warns about files it does not
-know, and ``overwrite`` deletes the store directory, lock included.
+:func:`~demseis.datasets.create.create_store` as the driver) holds :func:`writer_lock` for its
+whole run. The lock is a small JSON file **beside** the store, ``<store>.lock`` (for
+``out/t.zarr``: ``out/t.zarr.lock``), not inside it: zarr lists every entry of a store
+directory and warns about files it does not know, and ``overwrite`` deletes the store
+directory, lock included.
 
 Protocol
 --------

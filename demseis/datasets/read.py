@@ -1,7 +1,7 @@
 """Read-only views of a demseis store for evaluation and export.
 
 Every read of a store outside the training loader goes through here (or through
-:mod:`demseis.datasets.store`): the samples of completed shards (:func:`done_samples`), the label
+:mod:`demseis.datasets.layout`): the samples of completed shards (:func:`done_samples`), the label
 view that scoring needs (:func:`open_truth`), the per-sample parameters (:func:`read_params`), one
 seismic section with its grid (:func:`read_section`) and its SEG-Y export (:func:`export_segy`).
 """
@@ -16,8 +16,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from demseis.datasets.store import SAMPLE_ARRAYS, open_store, shard_status
+from demseis.datasets.layout import open_store
+from demseis.datasets.status import shard_status
 from demseis.errors import InputError, StoreError
+from demseis.schema import SAMPLE_ARRAYS
+from demseis.seismic.segy import write_segy
 
 
 def done_samples(root: Any, n: int, path: str | Path, *,
@@ -158,8 +161,6 @@ def export_segy(store: str | Path, sample: int, out: str | Path, overwrite: bool
 
     The headers are those of :func:`demseis.seismic.segy.write_segy`.
     """
-    from demseis.seismic.segy import write_segy
-
     section, grid = read_section(store, sample)
     domain = grid.get("domain", "depth")
     dt_s = grid.get("dt_s")
@@ -176,8 +177,9 @@ def _fmt(v: object) -> str:
 
 
 def store_summary(path: str | Path) -> list[str]:
-    """Lines describing a store: samples, shapes, parameter ranges over done samples, config
-    and failed runs (what ``demseis info`` prints)."""
+    """Lines describing a store: samples, its sample arrays (with their role, units and
+    description from :data:`demseis.schema.SAMPLE_ARRAYS`), parameter ranges over done
+    samples, config and failed runs (what ``demseis info`` prints)."""
     root = open_store(path)
     attrs = dict(root.attrs)
     cfg = attrs.get("config", {})
@@ -190,10 +192,12 @@ def store_summary(path: str | Path) -> list[str]:
                  f"done shards: {int(done.sum()) // max(per_shard, 1)}")
     grid = attrs.get("grid", {})
     lines.append(f"grid: {h} x {w} cells of {grid.get('cell_m')} m")
-    for name in SAMPLE_ARRAYS:
+    lines.append("sample arrays (role, units: description):")
+    for name, spec in SAMPLE_ARRAYS.items():
         if name in root:
             a = root[name]
-            lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks {tuple(a.chunks)}")
+            lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks "
+                         f"{tuple(a.chunks)}  {spec.role}, {spec.units}: {spec.description}")
     lines.append("parameters (over done samples):")
     for name, vals in read_params(root, int(n)).items():
         vals = vals[done]

@@ -17,17 +17,13 @@ from typing import Any
 
 import numpy as np
 
+from tqdm import tqdm
+
 from demseis.datasets.integrity import read_done_flags, shard_damage
-from demseis.datasets.store import (
-    LABEL_RANGES,
-    SCHEMA_VERSION,
-    _particle_group_name,
-    fill_value_for,
-    open_store,
-    read_particles,
-    store_layout,
-)
+from demseis.datasets.layout import SCHEMA_VERSION, fill_value_for, open_store, store_layout
+from demseis.datasets.particles import particle_group_name, read_particles
 from demseis.errors import StoreError
+from demseis.schema import sample_array
 
 _GRID_KEYS = ("x0_m", "top_m", "cell_m", "nz", "nx")
 
@@ -83,7 +79,7 @@ def _check_array(name: str, values: np.ndarray, shard: int, s0: int) -> list[str
     missing = (values == fill).all(axis=(1, 2))
     if missing.any():
         out.append(f"shard {shard}: {name} samples {_fmt(np.nonzero(missing)[0] + s0)} were never written")
-    lo, hi = LABEL_RANGES.get(name, (None, None))
+    lo, hi = sample_array(name).valid_range or (None, None)
     if lo is not None:
         hi_v = np.iinfo(values.dtype).max if hi is None else hi
         bad = (values < lo) | (values > hi_v)
@@ -130,7 +126,7 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
     - root attrs: ``demseis`` (schema and package version), ``config``, ``grid`` (with keys
       x0_m, top_m, cell_m, nz, nx matching the sample shape);
     - every done shard: each sample array readable, no NaN/inf in float arrays, no never-written
-      chunk, labels within :data:`LABEL_RANGES`; each parameter readable, no NaN (``inf`` only in
+      chunk, labels within their declared ``valid_range`` (:mod:`demseis.schema`); each parameter readable, no NaN (``inf`` only in
       parameters named ``*snr_db``), no missing integers; ``run_id`` (if stored) constant in
       the shard and different from every other shard's; ``snapshot`` (if stored) non-negative
       and, with particles stored, less than the run's number of snapshots;
@@ -193,8 +189,6 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
     s = layout.samples_per_shard
     pgroup = group["params"] if layout.params else None
     run_of_shard: dict[int, int] = {}
-    from tqdm import tqdm
-
     for k in tqdm(done_shards.tolist(), desc="validate", unit="shard", disable=not progress,
                   file=sys.stderr):
         sel = layout.shard_slice(k)
@@ -224,7 +218,7 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
         if "snapshot" in pvals and (pvals["snapshot"] < 0).any():
             problems.append(f"shard {k}: parameter snapshot has negative values")
         if check_particles and not any("particles" in line for line in damage) and (
-                Path(path) / _particle_group_name(run_id) / "zarr.json").is_file():
+                Path(path) / particle_group_name(run_id) / "zarr.json").is_file():
             try:
                 snaps = read_particles(path, run_id)
             except StoreError as exc:

@@ -15,7 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from demseis.datasets.store import open_store, shard_status, store_layout
+from demseis.datasets.layout import open_store, store_layout
+from demseis.datasets.status import shard_status
 from demseis.errors import DemseisError, StoreError
 
 XARRAY_EXTRA = "pip install 'demseis[xarray]'"

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from demseis.types import Snapshot
 from demseis.datasets import create_store, write_shard
+from demseis.schema import SAMPLE_ARRAYS
+from demseis.types import Snapshot
 
 PARAMS = {"run_id": "int32", "snapshot": "int16", "freq_hz": "float32", "snr_db": "float32",
           "noise_kind": "int8"}
@@ -68,6 +69,57 @@ def make_store(path: Path, n_shards: int = 4, s: int = 6, shape=(24, 32), write=
         d, p, parts = shard_data(k, s, shape, arrays, params, seed=seed)
         write_shard(path, k, d, p, parts)
     return path
+
+
+#: (samples per shard, sample shape, parameters) of the stores of :func:`every_array_shard`
+EVERY_S, EVERY_SHAPE = 5, (8, 12)
+EVERY_PARAM_DTYPES = {"a_i8": "int8", "b_i16": "int16", "c_i32": "int32", "d_i64": "int64",
+                      "e_u8": "uint8", "f_u16": "uint16", "g_f32": "float32", "h_f64": "float64"}
+
+
+def every_array_dtypes() -> dict[str, np.dtype]:
+    """Name -> dtype of every sample array the schema declares, in store order."""
+    return {name: spec.np_dtype for name, spec in SAMPLE_ARRAYS.items()}
+
+
+def every_array_shard(k: int, variant: int = 0) -> tuple[dict, dict, list[Snapshot]]:
+    """(arrays, params, particles) of shard ``k`` of a store of every sample array and every
+    parameter dtype (:data:`EVERY_PARAM_DTYPES`): random values, labels that fill an inner
+    chunk with one value (0: a constant chunk that is not the fill value), -0.0 and extremes."""
+    s, shape = EVERY_S, EVERY_SHAPE
+    rng = np.random.default_rng([k, variant])
+    arrays = {}
+    for name, dtype in every_array_dtypes().items():
+        if dtype.kind == "f":
+            a = rng.normal(size=(s, *shape)).astype(dtype)
+            a[1] = -0.0  # a float chunk of negative zeros
+            a[2] = 0.0
+        elif name in ("fault", "damage", "sense"):
+            a = rng.integers(0, 2, (s, *shape), dtype=dtype)
+            a[0] = 0  # a constant chunk that is not the fill value 255
+        else:
+            a = rng.integers(0, 3000, (s, *shape)).astype(dtype)
+            a[3] = np.iinfo(dtype).max
+        arrays[name] = a
+    params = {}
+    for name, dtype in EVERY_PARAM_DTYPES.items():
+        dt = np.dtype(dtype)
+        if dt.kind == "f":
+            params[name] = np.array([0.0, -0.0, np.inf, -1.5e30, 3.25])[:s].astype(dt)
+        else:
+            lo = np.iinfo(dt).min + 1 if dt.kind == "i" else 0  # the fill value is reserved
+            hi = np.iinfo(dt).max if dt.kind == "i" else np.iinfo(dt).max - 1
+            params[name] = np.array([lo, hi, 0, 1, hi - 7])[:s].astype(dt)
+    params["d_i64"] = np.full(s, k + 10 * variant, dtype=np.int64)  # constant chunk
+    snaps = []
+    for i in range(3):
+        m = 0 if i == 0 else 4 + i + variant  # snapshot 0 has no element
+        snaps.append(Snapshot(index=i, step=50 * i, throw_m=2.5 * i,
+                              ids=np.arange(m, dtype=np.int64), xy=rng.uniform(0, 9, (m, 2)),
+                              radius=rng.uniform(1, 2, m),
+                              layer=rng.integers(0, 9, m).astype(np.int16),
+                              deposited=np.zeros(m, dtype=bool)))  # all False: fill value 0
+    return arrays, params, snaps
 
 
 def digest(path: Path) -> dict[str, str]:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import pickle
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -10,6 +12,7 @@ import torch
 from torch.utils.data import DataLoader
 
 from demseis.datasets import FaultSegDataset, ShardAwareSampler, open_store, split_of_shards
+from demseis.datasets.dataset import crop_offsets
 from demseis.errors import InputError
 from tests.datasets._helpers import make_store
 
@@ -177,9 +180,6 @@ def test_dataset_argument_errors(store, tmp_path):
 
 
 def test_import_is_light():
-    import subprocess
-    import sys
-
     code = ("import sys, demseis.datasets; "
             "print(any(m in sys.modules for m in ('torch', 'dask', 'matplotlib')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -187,8 +187,6 @@ def test_import_is_light():
 
 
 def test_crop_offsets_cover_the_range_uniformly():
-    from demseis.datasets.dataset import crop_offsets
-
     samples = np.arange(200_000)
     r, c = crop_offsets(3, 0, samples, 22, 245)
     assert r.min() == 0 and r.max() == 21 and c.min() == 0 and c.max() == 244

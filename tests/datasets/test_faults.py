@@ -89,8 +89,8 @@ def test_two_identical_commands_at_once(tmp_path, reference):
 
 def _stop_once_locked(p: subprocess.Popen, out: Path, timeout_s: float = 120.0) -> None:
     """SIGSTOP ``p`` as soon as the lock of ``out`` names it: a stopped writer is alive and
-    holds the lock, however fast its own work would have ended (with a fixed head start, a
-    fast machine finished the first writer before the second one looked)."""
+    holds the lock, however fast its own work would end (with a fixed head start, a fast
+    machine can finish the first writer before the second one looks)."""
     t0 = time.perf_counter()
     while True:
         try:

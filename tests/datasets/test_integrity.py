@@ -4,6 +4,7 @@ of an undamaged store."""
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import time
@@ -12,6 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import demseis
+import demseis.datasets._shardio as shardio
+import demseis.datasets.dataset as dataset
+from demseis.cli import main
 from demseis.datasets import (
     FaultSegDataset,
     ParamSpec,
@@ -23,7 +28,7 @@ from demseis.datasets import (
     write_shard,
 )
 from demseis.errors import StoreError
-from tests.datasets._helpers import PARAMS, digest, make_store, shard_data
+from tests.datasets._helpers import PARAMS, digest, make_store, mini_config, shard_data
 
 S, SHAPE, N_SHARDS = 6, (24, 32), 4
 CAT_PARAMS = {**PARAMS, "noise_kind": ParamSpec("int8", categories=("white", "band"))}
@@ -148,8 +153,6 @@ def test_dataset_checks_a_chunk_once_and_again_after_its_file_changes(tmp_path, 
                                                                        monkeypatch, how):
     """docs/store.md: a chunk's crc32c is checked on its first read by a reader, not again while
     its shard file stays the same, and again once the file is written or replaced."""
-    import demseis.datasets._shardio as shardio
-
     calls = []
     real = shardio.crc_ok
     monkeypatch.setattr(shardio, "crc_ok", lambda b: calls.append(b.shape[0]) or real(b))
@@ -180,8 +183,6 @@ def test_dataset_checks_a_chunk_once_and_again_after_its_file_changes(tmp_path, 
 
 def test_dataset_keeps_its_checks_when_a_shard_map_is_dropped(tmp_path, pristine, monkeypatch):
     """A store of more shards than the reader keeps mapped is not checked again every epoch."""
-    import demseis.datasets._shardio as shardio
-
     calls = []
     real = shardio.crc_ok
     monkeypatch.setattr(shardio, "crc_ok", lambda b: calls.append(b.shape[0]) or real(b))
@@ -201,8 +202,6 @@ def test_dataset_keeps_its_checks_when_a_shard_map_is_dropped(tmp_path, pristine
 
 def test_dataset_zarr_path_names_the_damaged_samples(tmp_path, pristine, monkeypatch):
     """Arrays read through zarr (no raw fast path) also raise StoreError, not garbage."""
-    import demseis.datasets.dataset as dataset
-
     monkeypatch.setattr(dataset, "raw_shard_layout", lambda array: None)
     path = _copy(pristine, tmp_path / "s.zarr")
     _flip_fault(path)
@@ -239,8 +238,6 @@ def test_read_sample_values_and_category_names(pristine):
 
 def test_every_chunk_has_a_crc32c(pristine):
     """Each array's codec chain ends with crc32c (inside the shards for sample arrays)."""
-    import json
-
     metas = list(pristine.rglob("zarr.json"))
     arrays = [json.loads(m.read_text()) for m in metas]
     arrays = [m for m in arrays if m["node_type"] == "array"]
@@ -253,9 +250,7 @@ def test_every_chunk_has_a_crc32c(pristine):
 
 
 def test_plot_of_a_damaged_or_pending_sample_fails_clearly(tmp_path, capsys):
-    from demseis.cli import main
-    from demseis.generator.sweep import run_sweep
-    from tests.datasets._helpers import mini_config
+    from demseis.generator.sweep import run_sweep  # the generator loads numba: only here
 
     out = tmp_path / "g.zarr"
     run_sweep(mini_config(), out, workers=0, progress=False)
@@ -273,8 +268,6 @@ def test_plot_of_a_damaged_or_pending_sample_fails_clearly(tmp_path, capsys):
 
 
 def test_info_of_a_store_with_a_damaged_parameter_is_one_line(tmp_path, pristine, capsys):
-    from demseis.cli import main
-
     path = _copy(pristine, tmp_path / "s.zarr")
     assert main(["info", str(path)]) == 0
     _flip_param(path)
@@ -285,8 +278,6 @@ def test_info_of_a_store_with_a_damaged_parameter_is_one_line(tmp_path, pristine
 
 
 def test_store_sample_of_a_damaged_sample_fails_clearly(tmp_path, pristine):
-    import demseis
-
     path = _copy(pristine, tmp_path / "s.zarr")
     _flip_seismic(path)
     store = demseis.open(path)

@@ -27,11 +27,11 @@ S = 6
 
 CHILD = """
 import sys, time
-import demseis.datasets.store as store
+import demseis.datasets.write as write
 from tests.datasets._helpers import shard_data
 
 path, stop = sys.argv[1], sys.argv[2]
-real_write, real_particles = store._write_array, store.write_particles
+real_write, real_particles = write._write_array, write.write_particles
 calls = []
 
 def announce_and_wait(written=()):
@@ -50,9 +50,9 @@ def write_particles(*a, **k):
     if stop == "before-done-flag":
         announce_and_wait()
 
-store._write_array = write_array
-store.write_particles = write_particles
-store.write_shard(path, 2, *shard_data(2, {S}, {SHAPE}))
+write._write_array = write_array
+write.write_particles = write_particles
+write.write_shard(path, 2, *shard_data(2, {S}, {SHAPE}))
 print("FINISHED", flush=True)
 """
 

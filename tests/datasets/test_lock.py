@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from demseis.cli import main
 from demseis.datasets import writer_lock
 from demseis.datasets.lock import lock_path
 from demseis.errors import StoreError
@@ -135,8 +136,6 @@ def test_racing_takeovers_of_a_stale_lock_have_one_winner(tmp_path):
 
 
 def test_generate_and_render_refuse_a_locked_store(tmp_path, capsys):
-    from demseis.cli import main
-
     store = tmp_path / "t.zarr"
     child = _hold(store)
     try:

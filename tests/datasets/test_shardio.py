@@ -1,13 +1,14 @@
 """The direct writer of chunk and shard files (demseis.datasets._shardio) against zarr itself.
 
 Every file written by the direct path is compared byte for byte with the file zarr writes for
-the same data (zarr's own ``setitem``, the write path demseis used before), over every array
+the same data (zarr's own ``setitem``, the reference), over every array
 of a store, over every dtype and codec chain demseis uses and the fill-value edge cases; and
 zarr reads back what the direct path wrote.
 """
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import subprocess
@@ -20,35 +21,39 @@ import pytest
 import zarr
 from zarr.codecs import BloscCodec, BytesCodec, Crc32cCodec, ZstdCodec
 
+import demseis.datasets._shardio as shardio
 from demseis.datasets import (
-    SAMPLE_ARRAYS,
     create_store,
     read_particles,
     remove_partial_writes,
     shard_status,
     write_shard,
 )
+from demseis.datasets._nodes import small_compressors
 from demseis.datasets._shardio import array_meta, is_fill, temporary_name, write_block
-from demseis.datasets.store import (
-    PARTICLE_FIELDS,
-    _particle_group_name,
-    _small_compressors,
-    fill_value_for,
-)
+from demseis.datasets.layout import fill_value_for
+from demseis.datasets.particles import PARTICLE_FIELDS, particle_group_name
 from demseis.types import Snapshot
-from tests.datasets._helpers import digest, grid_attrs
+from tests.datasets._helpers import (
+    EVERY_PARAM_DTYPES,
+    EVERY_S,
+    EVERY_SHAPE,
+    digest,
+    every_array_dtypes,
+    every_array_shard,
+    grid_attrs,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
-SHAPE = (8, 12)
-S = 5
-PARAM_DTYPES = {"a_i8": "int8", "b_i16": "int16", "c_i32": "int32", "d_i64": "int64",
-                "e_u8": "uint8", "f_u16": "uint16", "g_f32": "float32", "h_f64": "float64"}
+SHAPE = EVERY_SHAPE
+S = EVERY_S
+PARAM_DTYPES = EVERY_PARAM_DTYPES
 
 
 def _zarr_write_shard(path: Path, k: int, arrays: dict, params: dict,
                       particles: list[Snapshot] | None, run_id: int) -> None:
-    """The write path of demseis before the direct writer: every chunk through zarr's setitem
-    (flag cleared first and set last, particles through zarr), kept here as the reference."""
+    """The reference write path: every chunk through zarr's setitem (flag cleared first and
+    set last, particles through zarr), in the order of write_shard."""
     g = zarr.open_group(path, mode="r+", use_consolidated=False)
     g["shard_done"][k] = 0
     sel = slice(k * S, (k + 1) * S)
@@ -71,13 +76,13 @@ def _zarr_write_shard(path: Path, k: int, arrays: dict, params: dict,
             "step": np.array([sn.step for sn in particles]),
             "throw_m": np.array([sn.throw_m for sn in particles]),
         }
-        group = g.create_group(_particle_group_name(run_id), overwrite=True,
+        group = g.create_group(particle_group_name(run_id), overwrite=True,
                                attributes={"run_id": run_id, "n_snapshots": len(particles)})
         for name, (dtype, dim, units, long_name) in PARTICLE_FIELDS.items():
             values = data[name].astype(dtype, copy=False)
             group.create_array(
                 name, shape=values.shape, dtype=dtype, chunks=(max(1, values.shape[0]),),
-                fill_value=0, compressors=_small_compressors(), dimension_names=(dim,),
+                fill_value=0, compressors=small_compressors(), dimension_names=(dim,),
                 attributes={"units": units, "long_name": long_name},
                 config={"write_empty_chunks": True},
             )[...] = values
@@ -85,47 +90,9 @@ def _zarr_write_shard(path: Path, k: int, arrays: dict, params: dict,
 
 
 def _every_array_store(path: Path) -> Path:
-    create_store(path, n_shards=3, samples_per_shard=S, shape=SHAPE, arrays=list(SAMPLE_ARRAYS),
+    create_store(path, n_shards=3, samples_per_shard=S, shape=SHAPE, arrays=list(every_array_dtypes()),
                  params=PARAM_DTYPES, attrs={"config": {}, "grid": grid_attrs(SHAPE)})
     return path
-
-
-def _shard(k: int, variant: int = 0) -> tuple[dict, dict, list[Snapshot]]:
-    """Data of every array of the store: random values, labels that fill an inner chunk with
-    one value (0: a constant chunk that is not the fill value), -0.0 and extremes."""
-    rng = np.random.default_rng([k, variant])
-    arrays = {}
-    for name, dtype in SAMPLE_ARRAYS.items():
-        if dtype.kind == "f":
-            a = rng.normal(size=(S, *SHAPE)).astype(dtype)
-            a[1] = -0.0  # a float chunk of negative zeros
-            a[2] = 0.0
-        elif name in ("fault", "damage", "sense"):
-            a = rng.integers(0, 2, (S, *SHAPE), dtype=dtype)
-            a[0] = 0  # a constant chunk that is not the fill value 255
-        else:
-            a = rng.integers(0, 3000, (S, *SHAPE)).astype(dtype)
-            a[3] = np.iinfo(dtype).max
-        arrays[name] = a
-    params = {}
-    for name, dtype in PARAM_DTYPES.items():
-        dt = np.dtype(dtype)
-        if dt.kind == "f":
-            params[name] = np.array([0.0, -0.0, np.inf, -1.5e30, 3.25])[:S].astype(dt)
-        else:
-            lo = np.iinfo(dt).min + 1 if dt.kind == "i" else 0  # the fill value is reserved
-            hi = np.iinfo(dt).max if dt.kind == "i" else np.iinfo(dt).max - 1
-            params[name] = np.array([lo, hi, 0, 1, hi - 7])[:S].astype(dt)
-    params["d_i64"] = np.full(S, k + 10 * variant, dtype=np.int64)  # constant chunk
-    snaps = []
-    for i in range(3):
-        m = 0 if i == 0 else 4 + i + variant  # snapshot 0 has no element
-        snaps.append(Snapshot(index=i, step=50 * i, throw_m=2.5 * i,
-                              ids=np.arange(m, dtype=np.int64), xy=rng.uniform(0, 9, (m, 2)),
-                              radius=rng.uniform(1, 2, m),
-                              layer=rng.integers(0, 9, m).astype(np.int16),
-                              deposited=np.zeros(m, dtype=bool)))  # all False: fill value 0
-    return arrays, params, snaps
 
 
 def test_write_shard_gives_zarrs_bytes_for_every_array(tmp_path):
@@ -133,7 +100,7 @@ def test_write_shard_gives_zarrs_bytes_for_every_array(tmp_path):
     direct = _every_array_store(tmp_path / "direct.zarr")
     assert digest(via_zarr) == digest(direct)
     for k, variant in ((0, 0), (2, 0), (0, 1)):  # (0, 1): a rewrite with other data
-        arrays, params, snaps = _shard(k, variant)
+        arrays, params, snaps = every_array_shard(k, variant)
         _zarr_write_shard(via_zarr, k, arrays, params, snaps, run_id=k)
         write_shard(direct, k, arrays, params, snaps, run_id=k)
         a, b = digest(via_zarr), digest(direct)
@@ -141,7 +108,7 @@ def test_write_shard_gives_zarrs_bytes_for_every_array(tmp_path):
     assert len(a) > 80  # every array of both stores was compared
     # zarr reads back what the direct path wrote (an independent check of the bytes)
     g = zarr.open_group(direct, mode="r")
-    arrays, params, snaps = _shard(0, 1)
+    arrays, params, snaps = every_array_shard(0, 1)
     for name, value in arrays.items():
         np.testing.assert_array_equal(g[name][:S], value)
         assert np.signbit(g[name][:S]).tolist() == np.signbit(value).tolist()
@@ -244,10 +211,10 @@ def test_temporary_files_of_a_killed_writer_are_removed(tmp_path):
     clean-up of a resume removes it and the rewrite gives the bytes of an uninterrupted run."""
     ref = _every_array_store(tmp_path / "ref.zarr")
     out = _every_array_store(tmp_path / "out.zarr")
-    write_shard(ref, 1, *_shard(1), run_id=1)
+    write_shard(ref, 1, *every_array_shard(1), run_id=1)
     child = textwrap.dedent("""
         import os, sys
-        from tests.datasets.test_shardio import _shard
+        from tests.datasets._helpers import every_array_shard
         from demseis.datasets import write_shard
         calls, real = [], os.replace
         def replace(src, dst):
@@ -256,7 +223,7 @@ def test_temporary_files_of_a_killed_writer_are_removed(tmp_path):
                 os._exit(9)  # killed: no clean-up runs
             real(src, dst)
         os.replace = replace
-        write_shard(sys.argv[1], 1, *_shard(1), run_id=1)
+        write_shard(sys.argv[1], 1, *every_array_shard(1), run_id=1)
     """)
     res = subprocess.run([sys.executable, "-c", child, str(out)], cwd=ROOT,
                          env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True)
@@ -266,15 +233,11 @@ def test_temporary_files_of_a_killed_writer_are_removed(tmp_path):
     assert temporary_name(Path("x")).name.startswith("x.")
     assert shard_status(out).tolist() == [0, 0, 0]
     assert remove_partial_writes(out) == left
-    write_shard(out, 1, *_shard(1), run_id=1)
+    write_shard(out, 1, *every_array_shard(1), run_id=1)
     assert digest(out) == digest(ref)
 
 
 def test_put_file_errors_name_the_file_and_leave_no_temporary(tmp_path, monkeypatch):
-    import errno
-
-    import demseis.datasets._shardio as shardio
-
     (tmp_path / "f").write_text("x")
     with pytest.raises(NotADirectoryError) as info:
         shardio.put_file(tmp_path / "f" / "chunk", b"data")

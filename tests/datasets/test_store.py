@@ -12,6 +12,7 @@ import zarr
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import demseis.datasets.write as write
 from demseis.datasets import (
     SCHEMA_VERSION,
     create_store,
@@ -23,10 +24,12 @@ from demseis.datasets import (
     record_failures,
     shard_status,
     stored_config,
+    to_xarray,
+    validate_store,
     write_shard,
 )
 from demseis.datasets._shardio import RawShardReader, raw_shard_layout
-from demseis.datasets.store import fill_value_for
+from demseis.datasets.layout import fill_value_for
 from demseis.errors import InputError, StoreError
 from tests.datasets._helpers import ARRAYS, PARAMS, grid_attrs, make_store, shard_data
 
@@ -169,8 +172,6 @@ def test_open_store_errors(tmp_path, setup, message):
         r"older demseis: regenerate it"),
 ])
 def test_open_store_other_schema_version(tmp_path, version, message):
-    from demseis.datasets import to_xarray
-
     path = make_store(tmp_path / "s.zarr", n_shards=1, s=1, shape=(2, 3))
     meta = json.loads((path / "zarr.json").read_text())
     meta["attributes"]["demseis"]["schema_version"] = version
@@ -211,18 +212,16 @@ def test_write_shard_rejects_bad_input(tmp_path):
 
 
 def test_rewrite_clears_done_flag_first(tmp_path, monkeypatch):
-    import demseis.datasets.store as store
-
     path = make_store(tmp_path / "s.zarr", write=[1])
     seen = []
-    real = store._write_array
+    real = write._write_array
 
     def spy(root, arr, sel, data):
         # a flag set to the fill value (0) has no chunk file: no file means "not done"
         seen.append(int((path / "shard_done" / "c" / "1").exists()))
         real(root, arr, sel, data)
 
-    monkeypatch.setattr(store, "_write_array", spy)
+    monkeypatch.setattr(write, "_write_array", spy)
     write_shard(path, 1, *shard_data(1, 6, (24, 32)))
     assert seen and set(seen) == {0}  # never done while its data is being replaced
     assert shard_status(path)[1] == 1
@@ -250,8 +249,6 @@ def test_read_particles_missing_run(tmp_path):
 
 
 def test_layer_minus_one_means_no_rock_and_is_valid(tmp_path):
-    from demseis.datasets import validate_store
-
     path = make_store(tmp_path / "s.zarr", n_shards=1, write=[])
     d, p, parts = shard_data(0, 6, (24, 32))
     d["layer"][:, :3] = -1  # rows above the free surface

@@ -10,14 +10,19 @@ import pytest
 
 xr = pytest.importorskip("xarray")
 
+import zarr  # noqa: E402
+
 from demseis.datasets import ParamSpec, to_xarray  # noqa: E402
+from demseis.datasets.create import UNIT_SUFFIXES, units_of  # noqa: E402
 from demseis.errors import DemseisError  # noqa: E402
+from demseis.parameters import PARAMS as PARAMETERS  # noqa: E402
+from demseis.parameters import SCENARIO, STORED  # noqa: E402
 from tests.datasets._helpers import PARAMS, make_store, mini_config  # noqa: E402
 
 
 @pytest.fixture(scope="module", params=["depth", "time"])
 def generated(request, tmp_path_factory):
-    from demseis.generator.sweep import run_sweep
+    from demseis.generator.sweep import run_sweep  # the generator loads numba: only here
 
     cfg = mini_config(request.param)
     out = tmp_path_factory.mktemp(request.param) / "g.zarr"
@@ -27,8 +32,6 @@ def generated(request, tmp_path_factory):
 
 
 def _all_groups(path):
-    import zarr
-
     root = zarr.open_group(path, mode="r")
     return {"/"} | {"/" + name for name, _ in root.groups()} | {
         "/" + f"particles/{name}" for name, _ in root["particles"].groups()}
@@ -48,7 +51,7 @@ def test_open_datatree_opens_every_group(generated):
 
 
 def test_to_xarray_coordinates_units_and_categories(generated):
-    from demseis.generator.pipeline import grid_of, time_axis_of
+    from demseis.generator.pipeline import grid_of, time_axis_of  # loads numba: only here
 
     cfg, out = generated
     ds = to_xarray(out)
@@ -57,8 +60,6 @@ def test_to_xarray_coordinates_units_and_categories(generated):
     assert ds["seismic"].dims == ("sample", row, "x")
     # every stored sample array is a data variable (per-pixel dip_deg as fault_dip_deg, since the
     # per-sample parameter dip_deg is a coordinate)
-    import zarr
-
     stored = {k for k, a in zarr.open_group(str(out), mode="r").arrays() if a.ndim == 3}
     assert {("fault_" + k if k == "dip_deg" else k) for k in stored} <= set(ds.data_vars)
     assert ds["dip_deg"].dims == ("sample",)
@@ -76,8 +77,6 @@ def test_to_xarray_coordinates_units_and_categories(generated):
     assert units["freq_hz"] == "Hz" and units["snr_db"] == "dB"
     assert units["density_kg_m3"] == "kg/m^3" and units["kn_n_m"] == "N/m"
     assert all(ds[name].attrs["long_name"] for name in ds.variables)
-    from demseis.parameters import SCENARIO, STORED
-
     declared = {k: p.unit or "1" for k, p in SCENARIO.items()}
     declared.update({p.name: p.unit or "1" for p in STORED})
     assert {k: units[k] for k in declared} == declared  # the declarations, one place per fact
@@ -86,8 +85,6 @@ def test_to_xarray_coordinates_units_and_categories(generated):
     assert set(ds["contact_model"].values.tolist()) <= {"frictional", "bonded"}
     assert bool(ds["done"].all())
     # the data are the store's
-    import zarr
-
     root = zarr.open_group(out, mode="r")
     np.testing.assert_array_equal(ds["fault"].values, root["fault"][...])
     assert ds.sel(x=ds["x"][3])["seismic"].shape[0] == root["seismic"].shape[0]
@@ -115,10 +112,7 @@ def test_missing_xarray_names_the_extra(tmp_path, monkeypatch):
 
 def test_units_from_names_agree_with_the_declarations():
     """A parameter given without units gets them from its name: the same as declared."""
-    from demseis.datasets.store import UNIT_SUFFIXES, units_of
-    from demseis.parameters import PARAMS, STORED
-
-    declared = {k: p.unit for k, p in PARAMS.items()} | {p.name: p.unit for p in STORED}
+    declared = {k: p.unit for k, p in PARAMETERS.items()} | {p.name: p.unit for p in STORED}
     checked = 0
     for name, unit in declared.items():
         if any(name.endswith(suffix) for suffix, _ in UNIT_SUFFIXES):
