@@ -1,6 +1,6 @@
 """Seconds per ``write_shard`` of a `quick` shard: this checkout against another one's, interleaved.
 
-Loads ``write_shard`` from another checkout's ``demseis/datasets/store.py`` (``--baseline``,
+Loads ``write_shard`` from another checkout's ``demseis/datasets/write.py`` (``--baseline``,
 e.g. the previous main, which wrote every chunk through zarr) beside this one's, writes the
 same shards (``run_shard`` of the `quick` preset, kinematic engine by default, or the DEM
 engine's with particles) into fresh stores with each, alternating A B A B, and prints one JSON
@@ -28,10 +28,12 @@ import numpy as np
 
 
 def _load_write_shard(checkout: Path):
-    """``write_shard`` of ``checkout``'s store module, loaded under another module name (it
-    imports only ``demseis`` modules whose API both checkouts share)."""
-    spec = importlib.util.spec_from_file_location(
-        "_baseline_store", checkout / "demseis" / "datasets" / "store.py")
+    """``write_shard`` of ``checkout``'s writing module (``demseis/datasets/write.py``, or
+    ``store.py`` in checkouts from before the store was split), loaded under another module
+    name (it imports only ``demseis`` modules whose API both checkouts share)."""
+    folder = checkout / "demseis" / "datasets"
+    path = folder / "write.py" if (folder / "write.py").exists() else folder / "store.py"
+    spec = importlib.util.spec_from_file_location("_baseline_store", path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # dataclasses look their module up there
     spec.loader.exec_module(module)

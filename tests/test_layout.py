@@ -47,6 +47,11 @@ def _imports(path: Path) -> list[tuple[str, list[str], int]]:
     return _imports_in(path, ROOT)
 
 
+def _module_level_import_lines(path: Path) -> set[int]:
+    """Lines of the imports that run when ``path`` is imported (not inside a function)."""
+    return {line for _, _, line in _imports_in(path, ROOT, top_level_only=True)}
+
+
 def _module_files() -> list[Path]:
     return sorted(p for p in PKG.rglob("*.py") if "__pycache__" not in p.parts)
 
@@ -193,9 +198,12 @@ def import_graph(root: Path = ROOT) -> dict[str, set[str]]:
         edges = graph.setdefault(me, set())
         found = _imports_in(path, root)
         if me == "demseis":
-            # the front door loads demseis.api on first attribute access, not at import
-            # (test_root_imports_lazily): only its module-level imports are imports
-            found = _imports_in(path, root, top_level_only=True)
+            # the front door loads demseis.api on first attribute access, not at import, and
+            # names it for type checkers only (test_root_imports_lazily): only the imports of
+            # its body run
+            body = {n.lineno for n in ast.parse(path.read_text()).body
+                    if isinstance(n, (ast.Import, ast.ImportFrom))}
+            found = [f for f in found if f[2] in body]
         for mod, names, _ in found:
             if mod not in modules:
                 continue
@@ -214,8 +222,7 @@ def _imports_in(path: Path, root: Path,
     rel = path.relative_to(root).with_suffix("")
     pkg_parts = list(rel.parts[:-1])
     out = []
-    tree = ast.parse(path.read_text(), str(path))
-    for node in (tree.body if top_level_only else ast.walk(tree)):
+    for node in _nodes(ast.parse(path.read_text(), str(path)), top_level_only):
         if isinstance(node, ast.Import):
             out += [(a.name, [], node.lineno) for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -225,6 +232,21 @@ def _imports_in(path: Path, root: Path,
             else:
                 mod = node.module or ""
             out.append((mod, [a.name for a in node.names], node.lineno))
+    return out
+
+
+def _nodes(tree: ast.Module, skip_functions: bool) -> list[ast.AST]:
+    """Every node of ``tree``; with ``skip_functions``, not those inside a function body."""
+    if not skip_functions:
+        return list(ast.walk(tree))
+    out: list[ast.AST] = []
+    stack: list[ast.AST] = list(tree.body)
+    while stack:
+        node = stack.pop()
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+            continue
+        out.append(node)
+        stack.extend(ast.iter_child_nodes(node))
     return out
 
 

@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from demseis.datasets.dataset import FaultSegDataset, ShardAwareSampler, crop_offsets
-from demseis.datasets.store import create_store, finalize_store, write_shard
+from demseis.datasets import create_store, finalize_store, write_shard
 from demseis.dem.assembly import Pack, settle_pack
 from demseis.dem.engine import Engine
 from demseis.dem.types import Material

@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 import pytest
+import zarr
+from scipy import ndimage
 
 import demseis
 from demseis.datasets import FaultSegDataset, validate_store
@@ -19,7 +21,8 @@ from demseis.generator.layout import grid_of
 from demseis.generator.rerender import rerender
 from demseis.generator.runsetup import run_info
 from demseis.registry import ENGINES, IMAGING
-from demseis.schema import engine_labels, sample_array
+from demseis.schema import (SAMPLE_ARRAYS, SampleArray, engine_labels, register_array,
+                            sample_array, stored_arrays)
 from demseis.seismic import ImagingMode, synthetic_sections
 
 
@@ -128,3 +131,33 @@ def test_a_registered_imaging_mode_goes_from_generate_to_the_dataset(tmp_path):
                                    atol=1e-6)
     with pytest.raises(ConfigError, match="imaging"):     # gone with its registration
         parse_config(raw)
+
+
+def _fault_wide(state: State) -> np.ndarray:
+    """The fault label grown by one cell (4-neighbourhood), from the engine's own label."""
+    return ndimage.binary_dilation(state.labels["fault"]).astype(np.uint8)
+
+
+def test_a_registered_label_array_goes_from_generate_to_the_dataset(tmp_path):
+    spec = SampleArray("fault_wide", "uint8", "label", "1", "fault label grown by one cell",
+                       fill=0, valid_range=(0, 1), producer=_fault_wide)
+    with SAMPLE_ARRAYS.registered("fault_wide", spec):
+        assert stored_arrays()[-1] == "fault_wide"
+        for engine in ("kinematic", "dem"):
+            out = tmp_path / f"{engine}.zarr"
+            store = demseis.generate(tiny(engine=engine), out=out, workers=0)
+            assert validate_store(out).ok
+            ds = FaultSegDataset(out, targets=("fault", "fault_wide"))
+            faulted = [i for i in range(len(ds)) if store.params["has_fault"][i]]
+            assert faulted, engine
+            for i in faulted:
+                _, y = ds[i]
+                fault, wide = y["fault"].numpy(), y["fault_wide"].numpy()
+                expect = ndimage.binary_dilation(fault).astype(np.uint8)
+                np.testing.assert_array_equal(wide, expect)    # made from the same state
+                assert wide.sum() > fault.sum()
+            root = zarr.open_group(str(out), mode="r")
+            assert root["fault_wide"].attrs["long_name"] == "fault label grown by one cell"
+    assert "fault_wide" not in stored_arrays()
+    with pytest.raises(demseis.DemseisError, match="producer"):
+        register_array(SampleArray("orphan", "uint8", "label", "1", "no producer"))

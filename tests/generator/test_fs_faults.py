@@ -40,7 +40,7 @@ def test_path_under_proc(capsys):
 
 def test_injected_disk_full_then_resume(reference, tmp_path, monkeypatch, capsys):
     """ENOSPC injected into the third array write of a shard (works on any machine)."""
-    import demseis.datasets.store as store
+    import demseis.datasets.write as store
     from demseis.datasets import shard_status
 
     real = store._write_array
