@@ -51,7 +51,7 @@ def test_open_datatree_opens_every_group(generated):
 
 
 def test_to_xarray_coordinates_units_and_categories(generated):
-    from demseis.generator.pipeline import grid_of, time_axis_of  # loads numba: only here
+    from demseis.generator.layout import grid_of, time_axis_of  # loads numba: only here
 
     cfg, out = generated
     ds = to_xarray(out)
