@@ -42,6 +42,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 def __getattr__(name: str) -> Any:
     if name in _API:
+        # lazy: the front door; `import demseis` must not import NumPy (tests/test_import.py)
         from demseis import api
 
         return getattr(api, name)

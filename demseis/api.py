@@ -1,7 +1,8 @@
 """The Python front door: :func:`generate`, :func:`open`, :func:`score` and :class:`Store`.
 
 Re-exported lazily by :mod:`demseis` (``demseis.generate`` ...), so ``import demseis`` stays
-light; dask, torch and xarray are imported only by the calls that need them::
+light; dask, torch and xarray are imported only by the calls that need them, and so are the
+generator and the scoring code (``demseis.open`` needs neither)::
 
     import demseis
     store = demseis.generate("tiny", out="t.zarr")      # a preset, a TOML path, a dict or a Config
@@ -20,7 +21,10 @@ from typing import Any
 
 import numpy as np
 
+from demseis.datasets import FaultSegDataset, open_store, read_sample, store_layout, to_xarray
+from demseis.datasets.read import done_samples, read_params, store_summary
 from demseis.errors import InputError, StoreError
+from demseis.generator.workers import start_forkserver
 
 
 def _decode(values: np.ndarray, attrs: dict[str, Any]) -> np.ndarray:
@@ -51,8 +55,6 @@ class Store:
     """
 
     def __init__(self, path: str | Path) -> None:
-        from demseis.datasets import open_store, store_layout
-
         self.path = Path(path)
         self._root = open_store(self.path, "r")
         self.layout = store_layout(self._root)
@@ -83,8 +85,6 @@ class Store:
     @property
     def done(self) -> np.ndarray:
         """(N,) bool: the samples whose shard is complete."""
-        from demseis.datasets.read import done_samples
-
         return done_samples(self._root, len(self), self.path, require_any=False)
 
     @property
@@ -94,8 +94,6 @@ class Store:
         ``demseis params`` and ``docs/parameters.md`` describe every column.
         """
         if self._params is None:
-            from demseis.datasets.read import read_params
-
             raw = read_params(self._root, len(self))
             self._params = {
                 k: _decode(v, dict(self._root["params"][k].attrs))
@@ -121,8 +119,6 @@ class Store:
         if not self.done[i]:
             raise StoreError(f"sample {i} of {str(self.path)!r} belongs to a shard that is not "
                              "complete; finish the sweep first (rerun demseis generate)")
-        from demseis.datasets import read_sample
-
         # checksums checked: a damaged sample is a StoreError naming the sample and the array
         out: dict[str, Any] = dict(read_sample(self.path, i, self.arrays).arrays)
         for k, v in self.params.items():
@@ -131,8 +127,6 @@ class Store:
 
     def summary(self) -> str:
         """What ``demseis info`` prints: samples, shapes, parameter ranges, config, failures."""
-        from demseis.datasets.read import store_summary
-
         return "\n".join(store_summary(self.path))
 
     def __repr__(self) -> str:
@@ -153,21 +147,19 @@ class Store:
         Keyword arguments go to :class:`~demseis.datasets.FaultSegDataset` (``inputs``,
         ``targets``, ``crop``, ``split``, ``where``, ``transform``, ``seed`` ...).
         """
-        from demseis.datasets import FaultSegDataset
-
         return FaultSegDataset(self.path, **kwargs)
 
     def to_xarray(self) -> Any:
         """The samples as a lazy :class:`xarray.Dataset` (:func:`demseis.datasets.to_xarray`):
         coordinates in metres (x, depth) or seconds (twt), units, parameters along ``sample``."""
-        from demseis import datasets
-
-        return datasets.to_xarray(self.path)
+        return to_xarray(self.path)
 
 
 def _resolve_config(config: Any) -> Any:
     """A :class:`~demseis.generator.config.Config` from a Config, a dict, a preset name or a
     TOML path."""
+    # lazy: the config loads the label and seismic stages (Numba, SciPy; ~0.7 s), which
+    # demseis.open and demseis.score never need
     from demseis.generator.config import PRESETS, Config, load_config, parse_config
 
     if isinstance(config, Config):
@@ -213,11 +205,10 @@ def generate(config: Any = None, *, out: str | Path, workers: int | None = None,
     if workers is not None and scheduler is not None:
         raise InputError("give either workers or scheduler, not both")
     if scheduler is None and workers != 0:
-        from demseis.generator.workers import start_forkserver
-
         # its preload (imports, Numba kernels) runs while this process imports the sweep,
         # prepares the store and starts the scheduler (demseis.generator.workers)
         start_forkserver()
+    # lazy: imported after start_forkserver() so that the server's preload runs meanwhile
     from demseis.generator.sweep import run_sweep
 
     summary = run_sweep(cfg, out, workers=workers, scheduler=scheduler, overwrite=overwrite,
@@ -248,7 +239,7 @@ def score(pred: Any, store: Store | str | Path, **kwargs: Any) -> Any:
         ``.overall`` (precision, recall, F1, IoU, ODS/OIS/AP), ``.rows`` per group,
         ``.table()``, ``.write(prefix)``.
     """
-    from demseis.evaluation.scoring import score_store
+    from demseis.evaluation.scoring import score_store  # lazy: SciPy, which open() never needs
 
     return score_store(pred, store, **kwargs)
 

@@ -1,6 +1,10 @@
 """All matplotlib drawing of demseis: ``demseis preview`` (PNG figures of one run, like the
 paper's Figures 2-6), ``demseis plot`` (one stored sample) and :func:`plot_snapshots` (particle
-plots of DEM snapshots, like the paper's Figure 2). matplotlib is imported inside the functions."""
+plots of DEM snapshots, like the paper's Figure 2).
+
+matplotlib is imported inside the functions that draw: it takes ~0.6 s to import, and the
+figures select the Agg backend when they are drawn, not when this module is imported (importing
+it must not switch the backend of an interactive session)."""
 
 from __future__ import annotations
 
@@ -49,7 +53,7 @@ def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot]]:
 
 def _draw_particles(ax: Any, snap: Snapshot, colors: np.ndarray, *, alpha_deposited: float = 0.45,
                     values: np.ndarray | None = None, cmap: str | None = None) -> Any:
-    from matplotlib.collections import EllipseCollection
+    from matplotlib.collections import EllipseCollection  # lazy: see the module docstring
 
     d = 2 * snap.radius
     kw: dict[str, Any] = {}
@@ -69,7 +73,7 @@ def _draw_particles(ax: Any, snap: Snapshot, colors: np.ndarray, *, alpha_deposi
 
 def layer_colors(layer: np.ndarray, n_pre: int) -> np.ndarray:
     """RGBA per element: alternating warm/cool bands for pre-kinematic layers, greys for growth."""
-    import matplotlib
+    import matplotlib  # lazy: see the module docstring
 
     cmap = matplotlib.colormaps["tab20"]
     rgba = np.asarray(cmap((layer % 20) / 20.0))
@@ -80,10 +84,10 @@ def layer_colors(layer: np.ndarray, n_pre: int) -> np.ndarray:
 
 def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
     """Write the preview figures of run ``run`` of ``source`` into ``out_dir``; return the paths."""
-    import matplotlib
+    import matplotlib  # lazy: see the module docstring
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: see the module docstring
 
     cfg, snaps = _load_source(source, run)
     out = Path(out_dir)
@@ -188,10 +192,10 @@ def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
 
 def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     """One stored sample: the section, its fault label over it, and the damage-zone map."""
-    import matplotlib
+    import matplotlib  # lazy: see the module docstring
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: see the module docstring
 
     root = open_store(store)
     n = root["seismic"].shape[0]
@@ -208,7 +212,7 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     h_m = grid["nz"] * grid["cell_m"]
     extent = (0, w_m / 1000, h_m / 1000, 0)
     clip = float(np.percentile(np.abs(sec), 99)) or 1.0
-    from matplotlib.colors import ListedColormap
+    from matplotlib.colors import ListedColormap  # lazy: see the module docstring
 
     fig, axes = plt.subplots(1, 3, figsize=(16, 1.3 + 16 / 3 * h_m / w_m), sharey=True, layout="constrained")
     axes[0].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect="equal")
@@ -262,11 +266,11 @@ def plot_snapshots(snaps: Sequence[Snapshot], path: str | os.PathLike, *, n_grou
     layers_per_group : layers sharing one colour (default: n_pre_kinematic_layers / 12).
     ncols : panels per row.
     """
-    import matplotlib
+    import matplotlib  # lazy: see the module docstring
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.collections import EllipseCollection
+    import matplotlib.pyplot as plt  # lazy: see the module docstring
+    from matplotlib.collections import EllipseCollection  # lazy: see the module docstring
 
     pre = snaps[0].layer[~snaps[0].deposited]
     n_layers = int(pre.max()) + 1 if pre.size else 1

@@ -8,7 +8,8 @@
 
 Each module has ``register(sub, bench)``, where ``sub`` is the top-level subparsers object and
 ``bench`` the subparsers of ``demseis bench``. A handler is ``func(args) -> int`` set with ``parser.set_defaults(func=...)``.
-Handlers import heavy modules (dask, torch, matplotlib) inside themselves, so ``--help`` is fast.
+Handlers import what they run (the library, NumPy, dask, torch, matplotlib) inside themselves, so
+``--help`` is fast.
 
 Any :class:`demseis.errors.DemseisError` becomes one line on stderr and its exit code (2 for
 usage and input errors); argparse's own usage errors also exit 2.
@@ -17,7 +18,9 @@ usage and input errors); argparse's own usage errors also exit 2.
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
+import warnings
 from collections.abc import Sequence
 
 from demseis import __version__
@@ -26,6 +29,7 @@ from demseis.errors import DemseisError
 
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser with every subpackage's subcommands registered."""
+    # imported here so that main() also turns a Ctrl-C during these imports into its message
     from demseis.cli import bench as bench_cli
     from demseis.cli import evaluate, generate, plots, store
 
@@ -78,9 +82,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         # an interrupted zarr call leaves a task on zarr's event loop; asyncio would log
         # "Task was destroyed but it is pending!" (or "never awaited") at exit. What was written is consistent
         # (a shard counts only once its done flag is set), so that message is noise.
-        import logging
-        import warnings
-
         logging.getLogger("asyncio").setLevel(logging.CRITICAL)
         warnings.filterwarnings("ignore", message="coroutine .* was never awaited")
         print("demseis: interrupted; run the same command to resume", file=sys.stderr)

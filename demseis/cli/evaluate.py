@@ -5,10 +5,15 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from demseis.errors import InputError
+
+if TYPE_CHECKING:
+    import numpy as np
+
+# The handlers below import the modules they run (NumPy too) inside themselves, so that
+# `demseis --help` imports none of them (see demseis.cli).
 
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -80,6 +85,8 @@ def _default_prefix(pred_path: str) -> str:
 
 
 def _load_indices(path: str) -> np.ndarray:
+    import numpy as np  # lazy: see the note above register()
+
     if not os.path.exists(path):
         raise InputError(f"--indices: file {path!r} does not exist")
     try:

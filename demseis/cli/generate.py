@@ -4,9 +4,13 @@ relabel a store's snapshots, list the parameters a config may set."""
 from __future__ import annotations
 
 import argparse
+import tomllib
 
 from demseis.cli._args import nonneg_int
-from demseis.errors import InputError
+from demseis.errors import ConfigError, InputError
+
+# The handlers below import the modules they run inside themselves, so that `demseis --help`
+# imports none of them (see demseis.cli).
 
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -123,9 +127,6 @@ def cmd_render(args: argparse.Namespace) -> int:
 
 
 def cmd_relabel(args: argparse.Namespace) -> int:
-    import tomllib
-
-    from demseis.errors import ConfigError
     from demseis.generator.rerender import relabel
 
     try:

@@ -6,6 +6,9 @@ import argparse
 
 from demseis.cli._args import nonneg_int
 
+# The handlers below import demseis.plotting (matplotlib, the whole pipeline) inside themselves,
+# so that `demseis --help` imports none of it (see demseis.cli).
+
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``preview`` and ``plot``."""

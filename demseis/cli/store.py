@@ -9,6 +9,9 @@ from __future__ import annotations
 import argparse
 import sys
 
+# The handlers below import the modules they run inside themselves, so that `demseis --help`
+# imports none of them (see demseis.cli).
+
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``info``, ``validate`` and ``export-segy``."""

@@ -32,8 +32,8 @@ import numpy as np
 
 from demseis.dem import detmath
 from demseis.dem.assembly import Assembly
-from demseis.dem.basement import (BlockMotion, FaultSystem, block_kinematics, check_fault_fields,
-                                  validate_system)
+from demseis.dem.basement import (BasementFault, BlockMotion, FaultSystem, block_kinematics,
+                                  check_fault_fields, validate_system)
 from demseis.dem.engine import Engine, time_step, validate_material
 from demseis.dem.types import Material, NormalFault
 from demseis.types import Snapshot
@@ -132,6 +132,8 @@ def _deposit(eng: Engine, x_lo: float, x_hi: float, level_m: float, template_xy:
 def _clear_of(pos: np.ndarray, radius: np.ndarray, new_xy: np.ndarray, new_r: np.ndarray,
               gap: float) -> np.ndarray:
     """(m,) bool: which new disks keep at least ``gap`` from every existing disk."""
+    # lazy: scipy.spatial takes ~0.3 s to import and only deposition during a run needs it;
+    # `import demseis.dem` loads no scipy submodule
     from scipy.spatial import cKDTree
 
     tree = cKDTree(pos)
@@ -150,8 +152,6 @@ def as_system(fault: NormalFault | FaultSystem) -> FaultSystem:
     if isinstance(fault, FaultSystem):
         return fault
     if isinstance(fault, NormalFault):
-        from demseis.dem.basement import BasementFault
-
         return FaultSystem((BasementFault(fault.x_m, fault.dip_deg, fault.throw_m,
                                           fault.dip_direction, "normal"),),
                            speed_m_s=fault.speed_m_s, structure="single")

@@ -30,12 +30,18 @@ tune it with the ODS threshold that :func:`demseis.evaluation.scoring.score` rep
 
 from __future__ import annotations
 
+import os
+import shutil
+import sys
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy import ndimage
+from tqdm import tqdm
 
+from demseis.datasets.read import open_sections
 from demseis.errors import InputError
 
 __all__ = [
@@ -121,6 +127,7 @@ def semblance_fault_probability(section: ArrayLike,
     ndarray, float32, same shape as ``section``
         Probabilities in [0, 1]; call a pixel a fault at ``>= DEFAULT_THRESHOLD``.
     """
+    # lazy: the Numba kernels load numba (~0.25 s), which scoring and the dip baseline never need
     from demseis.evaluation._kernels import dip_scan_semblance
 
     cfg = config or SemblanceBaseline()
@@ -172,8 +179,6 @@ def dip_fault_probability(section: ArrayLike, *, sigma_grad_px: float = 1.0,
     -------
     ndarray, float32, same shape as ``section``
     """
-    from scipy import ndimage
-
     stack, two_d = _check_section(section)
     for name, v in (("sigma_grad_px", sigma_grad_px), ("sigma_tensor_px", sigma_tensor_px)):
         if not (np.isfinite(v) and v > 0):
@@ -241,12 +246,6 @@ def baseline_store(store: Any, out: str, *, method: str = "dip", array: str = "s
     -------
     (done, n) : samples computed and samples in the store.
     """
-    import os
-    import shutil
-    import sys
-
-    from demseis.datasets.read import open_sections
-
     if method not in ("dip", "semblance"):
         raise InputError(f"method = {method!r}; allowed: 'dip' or 'semblance'")
     cfg = semblance or SemblanceBaseline()
@@ -269,15 +268,13 @@ def baseline_store(store: Any, out: str, *, method: str = "dip", array: str = "s
         dest: Any = np.lib.format.open_memmap(out + ".part.npy", mode="w+", dtype=np.float32,
                                               shape=(n, h, w))
     else:
-        import zarr
+        import zarr  # lazy: ~0.25 s to import, and only a Zarr output needs it
 
         dest = zarr.create_array(out + ".part", shape=(n, h, w), chunks=(1, h, w),
                                  dtype="float32", fill_value=0.0, overwrite=True)
         dest.attrs["demseis_baseline"] = {"threshold": 0.5, **settings}
     done = np.flatnonzero(valid)
     if progress:
-        from tqdm import tqdm
-
         done_iter: Any = tqdm(done, desc="baseline", unit="sample", file=sys.stderr)
     else:
         done_iter = done

@@ -48,14 +48,19 @@ rule as the distance transform at every threshold at once.
 
 from __future__ import annotations
 
+import csv
+import json
+import os
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
+from tqdm import tqdm
 
-from demseis.errors import InputError
+from demseis.datasets.read import open_truth
+from demseis.errors import InputError, StoreError
 
 if TYPE_CHECKING:
     from demseis.datasets.read import TruthStore
@@ -483,8 +488,6 @@ def load_predictions(path: str) -> Any:
 
     A Zarr group is accepted when it holds one array, or an array named ``pred``.
     """
-    import os
-
     if not os.path.exists(path):
         raise InputError(f"predictions {path!r} do not exist")
     if str(path).endswith(".npy"):
@@ -498,7 +501,7 @@ def load_predictions(path: str) -> Any:
                                  "np.save(path, pred.astype(np.float32))") from None
             raise InputError(f"predictions {path!r}: cannot read as .npy ({exc})") from exc
     else:
-        import zarr
+        import zarr  # lazy: ~0.25 s to import, and only Zarr predictions need it
 
         try:
             node = zarr.open(path, mode="r")
@@ -556,8 +559,6 @@ def score_store_counts(pred: Any, store: TruthStore, *, indices: ArrayLike | Non
     sample_index : ndarray (M,), int64
         The store sample index of each row of ``counts``.
     """
-    from demseis.errors import StoreError
-
     n_store, h, w = store.shape
     shape = tuple(int(s) for s in pred.shape)
     if shape[1:] != (h, w):
@@ -591,8 +592,6 @@ def score_store_counts(pred: Any, store: TruthStore, *, indices: ArrayLike | Non
     rows, sample = rows[order], sample[order]
     bar = None
     if progress:
-        from tqdm import tqdm
-
         bar = tqdm(total=int(rows.size), desc="score", unit="sample", file=None)
     parts = []
     for s in range(0, rows.size, block):
@@ -786,10 +785,6 @@ class StoreScore:
               meta: dict[str, Any] | None = None) -> list[str]:
         """Write ``<prefix>.csv`` and ``<prefix>.json`` (and ``<prefix>.samples.csv`` with
         ``per_sample``); returns the paths. ``meta`` goes into the JSON report."""
-        import csv
-        import json
-        import os
-
         os.makedirs(os.path.dirname(os.path.abspath(prefix)), exist_ok=True)
         with open(prefix + ".csv", "w", newline="") as fh:
             w = csv.DictWriter(fh, fieldnames=list(CSV_COLUMNS))
@@ -833,8 +828,6 @@ def score_store(pred: Any, store: Any, *, indices: ArrayLike | None = None,
     -------
     StoreScore
     """
-    from demseis.datasets.read import open_truth
-
     truth = open_truth(str(getattr(store, "path", store)))
     for name in by:
         if name not in truth.params:

@@ -1,7 +1,8 @@
 """A small 2D U-Net trained on a demseis store: one training loop for the examples and benchmarks.
 
-Only the public API is used (:class:`demseis.datasets.FaultSegDataset`, PyTorch). PyTorch is
-imported inside the functions, so ``import demseis.evaluation`` stays light.
+Only the public API is used (:class:`demseis.datasets.FaultSegDataset`, PyTorch). PyTorch
+(~2 s to import) is imported inside the functions that run it, so importing this module stays
+light.
 
 ::
 
@@ -22,13 +23,16 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
+from tqdm.auto import tqdm
 
+from demseis.datasets import FaultSegDataset
 from demseis.errors import InputError
+from demseis.evaluation.scoring import score
 
 
 def build_unet(base: int = 16):
     """A 3-level 2D U-Net: (B, 1, H, W) seismic -> (B, 1, H, W) fault logits (H, W % 4 == 0)."""
-    import torch
+    import torch  # lazy: heavy (~2 s), see the module docstring
     from torch import nn
 
     def block(cin: int, cout: int) -> nn.Sequential:
@@ -65,7 +69,7 @@ def build_unet(base: int = 16):
 def predict_sections(model, sections: np.ndarray, batch: int = 4,
                      device: str | None = None) -> np.ndarray:
     """Fault probabilities (N, H, W) float32 of seismic sections (N, H, W), padded to % 4."""
-    import torch
+    import torch  # lazy: heavy (~2 s), see the module docstring
 
     sections = np.asarray(sections)
     if sections.ndim != 3:
@@ -124,10 +128,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     (model, info) with info keys steps, epochs, seconds, final_loss, pos_weight, n_samples,
     n_runs, device.
     """
-    import torch
+    import torch  # lazy: heavy (~2 s), see the module docstring
     from torch.utils.data import DataLoader
-
-    from demseis.datasets import FaultSegDataset
 
     if (steps is None) == (minutes is None):
         raise InputError("train_unet: give exactly one of steps or minutes")
@@ -152,7 +154,7 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         ds = parts[0]
         loader = DataLoader(ds, batch_size=batch, shuffle=True, generator=gen, drop_last=False)
     else:
-        from torch.utils.data import ConcatDataset, WeightedRandomSampler
+        from torch.utils.data import ConcatDataset, WeightedRandomSampler  # lazy: torch
 
         ds = _Mixed(parts, ConcatDataset(parts))
         weights = torch.cat([torch.full((len(p),), 1.0 / len(p)) for p in parts])
@@ -173,8 +175,6 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     best = {"f1": -1.0, "step": 0, "state": None, "bad": 0, "history": []}
     bar = None
     if progress:
-        from tqdm.auto import tqdm
-
         bar = tqdm(total=steps, unit="step", desc="train")
 
     def done() -> bool:
@@ -183,8 +183,6 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         return step >= steps if steps is not None else time.perf_counter() - t0 >= budget
 
     def validate() -> None:
-        from demseis.evaluation import score
-
         prob = predict_sections(model, val[0], device=str(dev))
         f1 = float(score(prob, val[1], threshold=0.5, tolerance_px=2).f1)
         best["history"].append((step, round(f1, 4)))
@@ -255,8 +253,6 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
 def _validation_set(stores: list, target: str,
                     split_fractions: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
     """Whole sections and 0/1 truth of the ``val`` split of every store (runs, not samples)."""
-    from demseis.datasets import FaultSegDataset
-
     xs, ys = [], []
     for s in stores:
         ds = FaultSegDataset(s, inputs=("seismic",), targets=(target,), split="val",
@@ -289,7 +285,7 @@ class _Mixed:
 
 def _augment(x: Any, y: Any, gen: Any) -> tuple[Any, Any]:
     """Per-crop left-right flip, polarity flip and amplitude scaling (x 0.5 .. 2)."""
-    import torch
+    import torch  # lazy: heavy (~2 s), see the module docstring
 
     n = x.shape[0]
     flip = torch.rand(n, generator=gen) < 0.5

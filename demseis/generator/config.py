@@ -40,8 +40,10 @@ from demseis.generator.params import (
     parse_spec,
     spec_values_hint,
 )
+from demseis.labels import LabelConfig
 from demseis.parameters import PARAMS, PROPERTY_FIELDS, SCENARIO, Param
 from demseis.registry import ENGINES
+from demseis.seismic import PropertyModel
 
 PRESETS = ("tiny", "quick", "seed", "variety")
 
@@ -226,9 +228,6 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
 
     Missing keys take the defaults; every present key is checked.
     """
-    from demseis.labels import LabelConfig
-    from demseis.seismic import PropertyModel
-
     if not isinstance(raw, dict):
         raise ConfigError(f"{source}: expected a table at the top level")
     allowed_top = {"name", "sweep", "model", "grid", "labels", "output", "properties"}
@@ -295,8 +294,6 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
 
 def _cross_checks(cfg: Config) -> None:
     """Checks that involve more than one key."""
-    from demseis.seismic import PropertyModel
-
     throw = spec_values_hint(cfg.sweep.params["throw_m"])
     if throw and throw[1] > 0.6 * cfg.model.height_m:
         raise ConfigError(

@@ -5,6 +5,8 @@ from __future__ import annotations
 from collections import Counter
 from pathlib import Path
 
+import zarr
+
 from demseis.generator.layout import param_codes
 
 
@@ -12,8 +14,6 @@ def fault_distribution(path: str | Path) -> list[str]:
     """Lines counting the runs of a store by structure, by number of basement faults, and the
     faults by kind (one count per DEM run: the samples with ``sample_in_run == 0`` of done
     runs). Empty if the store has no fault-system parameters (written before they existed)."""
-    import zarr  # only when info is asked for: zarr's import is slow
-
     root = zarr.open_group(str(path), mode="r")
     params = root["params"]
     codes = dict(root.attrs).get("param_codes") or param_codes()  # the store's own codes

@@ -32,6 +32,7 @@ import math
 from typing import Any
 
 from demseis.errors import ConfigError
+from demseis.generator.params import spec_values_hint
 
 #: largest wall speed as a fraction of the p-wave speed 2 sqrt(Kn / (πρ)) (rule 1)
 MAX_WALL_MACH = 1.0e-2
@@ -49,8 +50,6 @@ def check_physics(cfg: Any) -> None:
 
     ``cfg`` is a :class:`demseis.generator.config.Config`; see the module docstring for the rules.
     """
-    from demseis.generator.params import spec_values_hint
-
     def rng_of(key: str) -> tuple[float, float]:
         lo, hi = spec_values_hint(cfg.sweep.params[key])
         return float(lo), float(hi)

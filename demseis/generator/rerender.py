@@ -3,11 +3,21 @@
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from demseis.datasets import (
+    finalize_store,
+    open_store,
+    read_particles,
+    record_failures,
+    shard_status,
+    write_shard,
+    writer_lock,
+)
 from demseis.errors import StoreError
 from demseis.generator.config import Config, parse_config
 from demseis.generator.engines import get_engine, require_particles, run_from_particles
@@ -44,8 +54,6 @@ def rerender_config(source_cfg: dict[str, Any], freqs_hz: list[float], snrs_db: 
 def rerender(source: str | Path, out: str | Path, **options: Any) -> SweepSummary:
     """Write a new store with every done run of ``source`` re-rendered, holding ``out``'s
     writer lock (options: those of :func:`_rerender`)."""
-    from demseis.datasets import writer_lock
-
     with writer_lock(out, "demseis render"):
         return _rerender(source, out, **options)
 
@@ -59,8 +67,6 @@ def _rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snr
     Runs that are not done in the source are recorded as failed in the new store. The
     imaging options (see :func:`rerender_config`) default to the source's.
     """
-    from demseis.datasets import open_store
-
     src = Path(source)
     root = open_store(src)
     cfg = rerender_config(dict(root.attrs)["config"], freqs_hz, snrs_db, noise_kind, imaging,
@@ -89,8 +95,6 @@ def relabel(source: str | Path, out: str | Path, *, labels: dict[str, Any],
         take their defaults, not the source's values.
     overwrite, progress : as for :func:`rerender`.
     """
-    from demseis.datasets import open_store, writer_lock
-
     with writer_lock(out, "demseis relabel"):
         src = Path(source)
         root = open_store(src)
@@ -101,16 +105,6 @@ def relabel(source: str | Path, out: str | Path, *, labels: dict[str, Any],
 def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
           progress: bool) -> SweepSummary:
     """Render and label every done run of ``src`` again with ``cfg`` into ``out``."""
-    import time
-
-    from demseis.datasets import (
-        finalize_store,
-        read_particles,
-        record_failures,
-        shard_status,
-        write_shard,
-    )
-
     t0 = time.perf_counter()
     if Path(out).resolve() == src.resolve():
         raise StoreError("--out must differ from the source store")

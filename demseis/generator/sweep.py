@@ -12,16 +12,32 @@ import contextlib
 import json
 import logging
 import os
+import shutil
+import signal
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
+from demseis.datasets import (
+    ParamSpec,
+    create_store,
+    finalize_store,
+    read_store_attrs,
+    record_failures,
+    remove_partial_writes,
+    shard_status,
+    write_shard,
+    writer_lock,
+)
+from demseis.datasets.lock import pid_alive
 from demseis.errors import ConfigError, InputError, SimulationError, StoreError
-from demseis.generator.config import Config, parse_config
+from demseis.generator.config import Config, load_config, parse_config
 from demseis.generator.engines import get_engine
 from demseis.generator.layout import array_dtypes, grid_of, param_codes, param_dtypes, sample_shape
 from demseis.generator.pipeline import run_shard
@@ -32,7 +48,10 @@ from demseis.generator.workers import (
     start_forkserver,
     worker_start_method,
 )
+from demseis.parameters import SCENARIO, STORED
 
+# dask and distributed (and psutil, which comes with them) are imported inside the functions
+# that start or reach a cluster: ~1 s of imports that a sweep with --workers 0 never needs
 
 
 @dataclass
@@ -118,8 +137,6 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
 
     Returns the per-shard status (1 = done).
     """
-    from demseis.datasets import create_store, read_store_attrs, remove_partial_writes, shard_status
-
     out = Path(out)
     attrs = store_attrs(cfg)
     if out.exists() and not overwrite:
@@ -155,8 +172,6 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
         )
     except OSError as exc:  # name the path the user gave, not the temporary one
         if out != target:
-            import shutil
-
             shutil.rmtree(out, ignore_errors=True)
         raise OSError(exc.errno, exc.strerror, str(target)) from None
     if out != target:
@@ -168,10 +183,6 @@ def _remove_orphan_creations(out: Path) -> None:
     """Delete the half-made stores ``.<name>.creating-<pid>`` beside ``out`` whose creating
     process is gone (a driver killed while it created the arrays). The caller holds the lock
     of ``out``, so no live driver is creating it; our own pid's leftover goes too."""
-    import shutil
-
-    from demseis.datasets.lock import pid_alive
-
     for d in out.parent.glob(f".{out.name}.creating-*"):
         pid = d.name.rsplit("-", 1)[-1]
         if d.is_dir() and pid.isdigit() and (int(pid) == os.getpid() or not pid_alive(int(pid))):
@@ -181,9 +192,6 @@ def _remove_orphan_creations(out: Path) -> None:
 def store_param_specs() -> dict[str, Any]:
     """Per-sample parameters of the store with their declared unit and doc (demseis.parameters)
     and, for the categorical ones, the names of their codes."""
-    from demseis.datasets import ParamSpec
-    from demseis.parameters import SCENARIO, STORED
-
     decl = {k: (p.unit, p.doc) for k, p in SCENARIO.items()}
     decl.update({p.name: (p.unit, p.doc) for p in STORED})  # throw_m: the throw reached
     codes = param_codes()
@@ -198,8 +206,6 @@ def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, An
     An unstable simulation is returned as an error record (retrying it would fail the same
     way); any other exception propagates so that dask retries the task.
     """
-    from demseis.datasets import write_shard
-
     start = time.time()
     t0 = time.perf_counter()
     c0 = time.thread_time()
@@ -229,8 +235,6 @@ def warm_numba_cache() -> None:
 
     Workers then load the cached machine code instead of each compiling it again.
     """
-    from demseis.generator.config import load_config
-
     raw_cfg = load_config(preset="tiny").to_dict()
     raw_cfg["sweep"].update(n_runs=1, n_layers=2, throw_m=20.0, dip_deg=60.0)
     # 1 m/s: the run outlasts one damping relaxation time (demseis.generator.physics)
@@ -273,8 +277,6 @@ def run_sweep(cfg: Config, out: str | Path, **options: Any) -> SweepSummary:
     holds the lock, the dask workers write their shards (see demseis.datasets.lock). The
     options are those of :func:`_run_sweep`.
     """
-    from demseis.datasets import writer_lock
-
     with writer_lock(out, "demseis generate"):
         return _run_sweep(cfg, out, **options)
 
@@ -300,8 +302,6 @@ def _run_sweep(
     progress : show a progress bar on stderr.
     retries : dask retries of a task whose worker died.
     """
-    from demseis.datasets import finalize_store, record_failures
-
     out = Path(out)
     t0 = time.perf_counter()
     remote = _connect(scheduler) if scheduler is not None else None  # fail before writing
@@ -368,7 +368,7 @@ def _account(summary: SweepSummary, bar: Any, result: dict[str, Any]) -> None:
 
 def _connect(scheduler: str) -> Any:
     """A client of the dask scheduler at ``scheduler``; InputError if it cannot be reached."""
-    from distributed import Client
+    from distributed import Client  # lazy: cluster only (see the imports above)
 
     try:
         return Client(scheduler, timeout="20s")
@@ -378,7 +378,7 @@ def _connect(scheduler: str) -> Any:
 
 def _run_distributed(store: str, cfg: Config, pending: list[int], summary: SweepSummary,
                      bar: Any, workers: int | None, remote: Any, retries: int) -> None:
-    from distributed import as_completed
+    from distributed import as_completed  # lazy: cluster only (see the imports above)
 
     cluster = None
     t_start = time.perf_counter()
@@ -423,8 +423,6 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
 
 def _quiet_dask_logs() -> None:
     """Only CRITICAL from dask's loggers in this process (an interrupted sweep shutting down)."""
-    import logging
-
     for name in list(logging.root.manager.loggerDict):
         if name == "distributed" or name.startswith("distributed."):
             logging.getLogger(name).setLevel(logging.CRITICAL)
@@ -433,9 +431,6 @@ def _quiet_dask_logs() -> None:
 @contextlib.contextmanager
 def _sigint_deferred() -> Any:
     """Hold SIGINT in the main thread for the block; one that arrived is raised at its end."""
-    import signal
-    import threading
-
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -451,7 +446,7 @@ def _sigint_deferred() -> Any:
 
 def _wait_spawned(n: int, timeout_s: float = 60.0) -> None:
     """Wait until ``n`` worker processes (multiprocessing spawn children) exist."""
-    import psutil
+    import psutil  # lazy: cluster only, and a dependency of distributed, not of demseis
 
     me = psutil.Process()
     deadline = time.monotonic() + timeout_s
@@ -492,8 +487,7 @@ def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: in
     the driver while the worker processes start: tasks are submitted only after both, so no
     worker compiles a kernel the driver is compiling.
     """
-    import threading
-
+    # lazy: cluster only (see the imports above); _worker imports distributed
     import dask
     from distributed import Client, LocalCluster
 
@@ -515,7 +509,7 @@ def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: in
     warmer = None
     if method == "forkserver":
         start_forkserver()  # a no-op when demseis.api.generate started it already
-        import distributed.utils
+        import distributed.utils  # lazy: cluster only (see the imports above)
 
         # dask's own forkserver preload list would import pandas and the like into the driver
         if hasattr(distributed.utils, "_forkserver_preload_set"):
@@ -569,7 +563,5 @@ def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: in
 
 
 def _progress_bar(total: int, enabled: bool, desc: str = "generate") -> Any:
-    from tqdm import tqdm
-
     return tqdm(total=total, unit="sample", desc=desc, disable=not enabled,
                 file=sys.stderr, dynamic_ncols=True)

@@ -19,8 +19,14 @@ forkserver,spawn`` (README, "Measured performance").
 from __future__ import annotations
 
 import contextlib
+import multiprocessing
+import multiprocessing.forkserver
 import os
+import signal
+import threading
 from collections.abc import Iterator
+
+from demseis.errors import InputError
 
 #: thread counts of the worker processes: one task per worker, one thread per task
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
@@ -37,10 +43,6 @@ def worker_start_method() -> str:
     InputError
         ``DEMSEIS_WORKER_START`` names another method, or one this platform lacks.
     """
-    import multiprocessing
-
-    from demseis.errors import InputError
-
     available = multiprocessing.get_all_start_methods()
     forced = os.environ.get("DEMSEIS_WORKER_START", "").strip()
     if forced:
@@ -67,9 +69,6 @@ def start_forkserver() -> None:
     """
     if worker_start_method() != "forkserver":
         return
-    import multiprocessing
-    import multiprocessing.forkserver
-
     set_worker_env()
     multiprocessing.get_context("forkserver").set_forkserver_preload(
         ["demseis.generator._forkserver_preload"])
@@ -81,9 +80,6 @@ def start_forkserver() -> None:
 def sigint_ignored() -> Iterator[None]:
     """SIGINT ignored (SIG_IGN) for the block, in the main thread (elsewhere a no-op): processes
     started meanwhile inherit it."""
-    import signal
-    import threading
-
     if threading.current_thread() is not threading.main_thread():
         yield
         return

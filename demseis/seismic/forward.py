@@ -90,6 +90,7 @@ def convolve(trace: np.ndarray, wavelet: np.ndarray, axis: int = -1) -> np.ndarr
     the centred ("same") part of the full discrete convolution, like ``np.convolve(...,
     mode="same")`` and ``bruges.filters.convolve``.
     """
+    # lazy: scipy.signal takes ~1 s to import; the render does not call this helper
     from scipy.signal import fftconvolve
 
     x = np.asarray(trace, dtype=np.float64)

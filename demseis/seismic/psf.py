@@ -83,6 +83,9 @@ from demseis.seismic import _kernels
 from demseis.seismic.forward import _check_grids, interface_times, synthetic_sections
 from demseis.seismic.wavelet import _check_freqs, ricker_half_width_s
 
+# scipy.fft is imported inside the functions that use it: it takes ~0.2 s to import, only PSF
+# imaging needs it, and `import demseis.seismic` loads no scipy submodule
+
 DEFAULT_TAPER_DEG = 5.0
 """Width of the raised-cosine edge of the dip mask (degrees), inside the maximum angle."""
 
@@ -142,7 +145,7 @@ def node_weights(n_rows: int, n_windows: int) -> tuple[np.ndarray, np.ndarray]:
 def padded_shape(n_rows: int, n_cols: int, pad_rows: int, pad_cols: int) -> tuple[int, int]:
     """FFT grid of a section padded by ``pad_rows`` below and ``pad_cols`` on each side
     (sizes rounded up to fast FFT lengths)."""
-    from scipy.fft import next_fast_len
+    from scipy.fft import next_fast_len  # lazy: see the note above the imports
 
     return (next_fast_len(n_rows + pad_rows, real=True),
             next_fast_len(n_cols + 2 * pad_cols, real=True))
@@ -185,7 +188,7 @@ def dip_masks(shape: tuple[int, int], row_step: float, col_step_m: float,
     -------
     (K, N, M // 2 + 1) float64 weights.
     """
-    from scipy.fft import fftfreq, rfftfreq
+    from scipy.fft import fftfreq, rfftfreq  # lazy: see the note above the imports
 
     fz = np.abs(fftfreq(shape[0], row_step)).astype(np.float32)[:, None]
     kx = np.abs(rfftfreq(shape[1], col_step_m)).astype(np.float32)[None, :]
@@ -245,7 +248,7 @@ def dip_filter(sections: np.ndarray, plan: PsfPlan) -> np.ndarray:
     float32 array of the input's shape: ``sum_k g_k(row) (a_k ** s)`` on the padded grid,
     cropped back.
     """
-    from scipy.fft import ifft, irfft, rfft2
+    from scipy.fft import ifft, irfft, rfft2  # lazy: see the note above the imports
 
     s = np.asarray(sections)
     n_rows, n_cols = s.shape[-2:]

@@ -23,6 +23,7 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+import segyio
 
 from demseis.errors import InputError
 
@@ -35,8 +36,6 @@ def write_segy(section: np.ndarray, out: str | Path, *, x0_m: float, cell_m: flo
     The file is written next to ``out`` under a temporary name and renamed, so an existing file
     is never left half-written; it is replaced only with ``overwrite=True``.
     """
-    import segyio
-
     out = Path(out)
     sec = np.ascontiguousarray(section, dtype=np.float32)
     if sec.ndim != 2:
