@@ -23,6 +23,7 @@ from demseis.generator.layout import grid_of
 from demseis.generator.runsetup import property_model_of, run_properties
 from demseis.generator.sampling import plan_run
 from demseis.labels import displacement_history, label_maps, strain_history
+from demseis.schema import sample_array
 from demseis.seismic import (element_properties, imaging_mode, property_grids, rasterise,
                              synthetic_sections)
 from demseis.types import Snapshot
@@ -232,9 +233,11 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
         axes[1].imshow(np.ma.masked_equal(fault, 0), cmap=ListedColormap(["red"]),
                        extent=extent, aspect="equal", interpolation="nearest")
         axes[1].set_title("fault label (red) over the section")
-    axes[2].imshow(damage, cmap="magma", vmin=0, vmax=2, extent=extent, aspect="equal",
+    damage_spec = sample_array("damage")
+    axes[2].imshow(damage, cmap="magma", vmin=damage_spec.valid_range[0],
+                   vmax=damage_spec.valid_range[1], extent=extent, aspect="equal",
                    interpolation="nearest")
-    axes[2].set_title("damage: 0 background, 1 damage zone, 2 fault core")
+    axes[2].set_title(damage_spec.description)
     for ax in axes:
         ax.set_xlabel("x (km)")
     axes[0].set_ylabel("depth (km)")

@@ -307,3 +307,51 @@ def test_cycle_checker_finds_a_hidden_cycle(tmp_path):
                                      "demseis.labels.traces"]]
     (pkg / "labels" / "traces.py").write_text("from demseis import errors\n")
     assert import_cycles(import_graph(tmp_path)) == []
+
+
+#: what a function may import: heavy or optional libraries, imported only where they are used
+#: (each such import says why beside it)
+LAZY_LIBRARIES = ("torch", "matplotlib", "xarray", "zarr", "dask", "distributed", "psutil",
+                  "scipy.fft", "scipy.signal", "scipy.spatial")
+#: package modules that load the package lazily: the front door (``import demseis`` loads no
+#: NumPy), the CLI (``demseis --help`` loads no command), and two modules that stand for a
+#: heavy library (the dask worker plugin, the Numba kernels of the semblance baseline)
+LAZY_PACKAGE = {
+    "__init__.py": None, "api.py": None, "cli": None,
+    "generator/sweep.py": {"demseis.generator._worker"},
+    "evaluation/baseline.py": {"demseis.evaluation._kernels"},
+}
+
+
+def _function_imports(path: Path) -> list[tuple[str, int]]:
+    """(module, line) of every import inside a function of ``path``."""
+    everything = {(m, line) for m, _, line in _imports(path)}
+    top = _module_level_import_lines(path)
+    return sorted((m, line) for m, line in everything if line not in top)
+
+
+def _lazy_allowed(rel: Path, module: str) -> bool:
+    if any(module == lib or module.startswith(lib + ".") for lib in LAZY_LIBRARIES):
+        return True
+    for where, modules in LAZY_PACKAGE.items():
+        if rel.as_posix() == where or rel.parts[0] == where:
+            return modules is None or module in modules
+    return False
+
+
+def test_functions_import_only_heavy_libraries():
+    bad = []
+    for path in _module_files():
+        rel = path.relative_to(PKG)
+        for module, line in _function_imports(path):
+            if not _lazy_allowed(rel, module):
+                bad.append(f"demseis/{rel}:{line} imports {module} inside a function")
+    assert not bad, "move these imports to the top of their module:\n" + "\n".join(bad)
+
+
+def test_lazy_import_rule_is_not_vacuous():
+    assert _lazy_allowed(Path("plotting.py"), "matplotlib.pyplot")
+    assert _lazy_allowed(Path("cli/store.py"), "demseis.datasets.read")
+    assert not _lazy_allowed(Path("generator/sweep.py"), "demseis.datasets")
+    assert not _lazy_allowed(Path("labels/maps.py"), "demseis.labels.traces")
+    assert not _lazy_allowed(Path("datasets/read.py"), "json")
