@@ -13,17 +13,7 @@ import pytest
 import zarr
 
 from demseis.cli import main
-
-
-def _tree_bytes(path: Path) -> dict[str, bytes]:
-    return {str(p.relative_to(path)): p.read_bytes() for p in sorted(path.rglob("*")) if p.is_file()}
-
-
-def assert_same_bytes(a: Path, b: Path) -> None:
-    ta, tb = _tree_bytes(a), _tree_bytes(b)
-    assert sorted(ta) == sorted(tb), set(ta) ^ set(tb)
-    different = [k for k in ta if ta[k] != tb[k]]
-    assert not different, f"files differ: {different[:5]}"
+from tests.generator._helpers import assert_same_bytes, tree_bytes
 
 
 def test_tiny_store_contents(tiny_store):
@@ -57,10 +47,10 @@ def test_same_command_same_bytes(tiny_store, tmp_path):
 
 
 def test_rerun_on_complete_store_is_a_no_op(tiny_store, capsys):
-    before = _tree_bytes(tiny_store)
+    before = tree_bytes(tiny_store)
     assert main(["generate", "--preset", "tiny", "--out", str(tiny_store), "--workers", "0", "--quiet"]) == 0
     assert "2 already done, 0 written now" in capsys.readouterr().out
-    assert _tree_bytes(tiny_store) == before
+    assert tree_bytes(tiny_store) == before
 
 
 def test_no_progress_bar_when_nothing_is_left(tiny_store, capsys):
@@ -113,12 +103,12 @@ def test_finalize_removes_temporary_files_of_a_killed_worker(tiny_store, tmp_pat
 def test_different_config_refused_without_overwrite(tiny_store, tmp_path, capsys):
     cfg = tmp_path / "c.toml"
     cfg.write_text("[sweep]\nseed = 99\n")
-    before = _tree_bytes(tiny_store)
+    before = tree_bytes(tiny_store)
     code = main(["generate", str(cfg), "--preset", "tiny", "--out", str(tiny_store), "--workers", "0"])
     err = capsys.readouterr().err
     assert code == 2
     assert "different config" in err and "sweep.seed" in err and "--overwrite" in err
-    assert _tree_bytes(tiny_store) == before
+    assert tree_bytes(tiny_store) == before
 
 
 def test_overwrite_replaces(tiny_store, tmp_path):

@@ -16,7 +16,7 @@ import pytest
 
 from demseis.cli import main
 from tests.generator._faults import ROOT, dask_workers, spawn
-from tests.generator.test_generate import assert_same_bytes
+from tests.generator._helpers import assert_same_bytes
 
 N_TRIALS = 20
 
