@@ -248,7 +248,7 @@ def test_killed_worker_is_retried(tmp_path):
     """SIGKILL one dask worker process mid-sweep: the sweep still completes every shard."""
     import psutil
 
-    from tests.generator._faults import dask_workers
+    from tests.faults._helpers import dask_workers
 
     cfg = tmp_path / "c.toml"
     cfg.write_text("[sweep]\nn_runs = 4\nthrow_m = 200\n[model]\nwidth_m = 2400.0\nheight_m = 800.0\n")

@@ -12,7 +12,7 @@ import pytest
 
 from demseis.errors import InputError
 from demseis.generator.workers import worker_start_method
-from tests.generator._faults import ROOT
+from tests._helpers import ROOT
 from tests.generator._helpers import assert_same_bytes
 
 

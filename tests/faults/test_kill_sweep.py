@@ -15,7 +15,7 @@ import psutil
 import pytest
 
 from demseis.cli import main
-from tests.generator._faults import ROOT, dask_workers, spawn
+from tests.faults._helpers import ROOT, dask_workers, spawn
 from tests.generator._helpers import assert_same_bytes
 
 N_TRIALS = 20
