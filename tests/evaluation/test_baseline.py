@@ -13,6 +13,7 @@ from demseis.evaluation._kernels import dip_scan_semblance
 from demseis.evaluation.baseline import SemblanceBaseline, semblance_fault_probability
 from demseis.evaluation.scoring import score
 from demseis.diagnostics.toys import faulted_section, ricker_pulse as ricker
+from tests.evaluation._helpers import make_store
 
 
 def _reference_semblance(u, slopes, ht, hs, eps):
@@ -92,8 +93,6 @@ def test_stack_and_errors():
 
 
 def test_cli_baseline_then_score(tmp_path, capsys):
-    from tests.evaluation.test_scoring_store import make_store
-
     secs, truths = zip(*(faulted_section(nz=32, nx=32, seed=s) for s in range(6)))
     seismic = np.stack(secs)
     make_store(tmp_path / "s.zarr", n_shards=3, per_shard=2, h=32, w=32, seismic=seismic,
@@ -121,8 +120,6 @@ def test_cli_baseline_then_score(tmp_path, capsys):
 
 
 def test_cli_baseline_needs_no_labels_but_seismic(tmp_path, capsys):
-    from tests.evaluation.test_scoring_store import make_store
-
     make_store(tmp_path / "s.zarr", n_shards=2, per_shard=2, h=16, w=16, with_fault=False)
     assert main(["baseline", str(tmp_path / "s.zarr"), "--out", str(tmp_path / "p.zarr")]) == 0
     assert zarr_shape(tmp_path / "p.zarr") == (4, 16, 16)

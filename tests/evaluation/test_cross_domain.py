@@ -13,7 +13,7 @@ import pytest
 pytest.importorskip("torch")
 
 from demseis.errors import InputError  # noqa: E402
-from tests.generator.test_kinematic import kinematic_cfg  # noqa: E402
+from tests.generator._helpers import kinematic_cfg  # noqa: E402
 
 BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "cross_domain.py"
 

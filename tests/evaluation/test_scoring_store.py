@@ -9,39 +9,11 @@ import numpy as np
 import pytest
 import zarr
 
-from demseis.datasets import SCHEMA_VERSION
 from demseis.errors import InputError, StoreError
 from demseis.cli import main
 from demseis.datasets.read import open_truth
 from demseis.evaluation.scoring import group_rows, score, score_store_counts
-
-
-def make_store(path, n_shards=3, per_shard=4, h=24, w=20, seed=0, done=None, with_fault=True,
-               seismic=None):
-    """A small store with the layout of docs/store.md: fault labels are vertical lines."""
-    rng = np.random.default_rng(seed)
-    n = n_shards * per_shard
-    root = zarr.open_group(str(path), mode="w")
-    root.attrs["demseis"] = {"schema_version": SCHEMA_VERSION}
-    root.attrs["grid"] = {"x0_m": 0.0, "top_m": 0.0, "cell_m": 10.0, "nz": h, "nx": w}
-    root.attrs["config"] = {}
-    fault = np.zeros((n, h, w), np.uint8)
-    for i in range(n):
-        fault[i, :, int(rng.integers(3, w - 3))] = 1
-    if with_fault:
-        root.create_array("fault", data=fault, chunks=(1, h, w))
-    sei = rng.normal(size=(n, h, w)).astype(np.float32) if seismic is None else seismic
-    root.create_array("seismic", data=sei.astype(np.float32), chunks=(1, h, w))
-    params = root.create_group("params")
-    params.create_array("run_id", data=np.repeat(np.arange(n // 2), 2).astype(np.int64))
-    params.create_array("snapshot", data=np.tile([0, 1], n // 2).astype(np.int64))
-    params.create_array("freq_hz", data=np.tile([20.0, 40.0, 60.0], n // 3 + 1)[:n])
-    params.create_array("snr_db", data=np.tile([np.inf, 10.0], n // 2))
-    params.create_array("dip_deg", data=np.linspace(50.0, 80.0, n))
-    params.create_array("throw_m", data=np.linspace(10.0, 100.0, n))
-    flags = np.ones(n_shards, np.uint8) if done is None else np.asarray(done, np.uint8)
-    root.create_array("shard_done", data=flags, chunks=(1,))
-    return fault
+from tests.evaluation._helpers import make_store
 
 
 def test_store_counts_and_grouping(tmp_path):

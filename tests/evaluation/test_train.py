@@ -14,14 +14,14 @@ pytest.importorskip("torch")
 
 from demseis.errors import InputError  # noqa: E402
 from demseis.evaluation.train import build_unet, predict_sections, train_unet  # noqa: E402
-from tests.evaluation.test_scoring_example import _tiny_store  # noqa: E402
+from tests.evaluation._helpers import toy_store  # noqa: E402
 
 BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "learnability.py"
 
 
 def test_train_unet_fixed_steps_is_repeatable(tmp_path):
     store = tmp_path / "tiny.zarr"
-    _tiny_store(store)
+    toy_store(store)
     kw = dict(steps=3, crop=16, batch=4, base=4, threads=1, device="cpu", log=None)
     m1, info = train_unet(store, **kw)
     m2, _ = train_unet(store, **kw)
@@ -40,7 +40,7 @@ def test_train_unet_fixed_steps_is_repeatable(tmp_path):
 
 def test_learnability_benchmark_prints_one_json_line(tmp_path, capsys):
     store = tmp_path / "tiny.zarr"
-    _tiny_store(store)
+    toy_store(store)
     bench_main = runpy.run_path(str(BENCH))["main"]
     assert bench_main([str(store), "--steps", "2", "--crop", "16", "--batch", "4", "--base", "4",
                      "--threads", "1", "--test-fraction", "0.4", "--device", "cpu"]) == 0
@@ -77,7 +77,7 @@ def test_learnability_benchmark_test_f1_at_train_threshold_is_read_off_the_test_
     from demseis.evaluation import train as train_mod
 
     store = tmp_path / "tiny.zarr"
-    _tiny_store(store)
+    toy_store(store)
     seen = []
     real_predict = train_mod.predict_sections
 
@@ -106,7 +106,7 @@ def test_learnability_benchmark_test_f1_at_train_threshold_is_read_off_the_test_
 def test_learnability_benchmark_train_runs_subset_keeps_the_held_out_runs(tmp_path, capsys):
     """--train-runs N trains and scores the first N train runs; the held-out runs stay the same."""
     store = tmp_path / "tiny.zarr"
-    _tiny_store(store)
+    toy_store(store)
     bench_main = runpy.run_path(str(BENCH))["main"]
     common = [str(store), "--steps", "1", "--crop", "16", "--batch", "4", "--base", "4",
               "--threads", "1", "--test-fraction", "0.4", "--device", "cpu"]
@@ -127,7 +127,7 @@ def test_learnability_save_pred_and_figure(tmp_path, capsys):
     """--save-pred keeps held-out sections with faults and their predictions; the figure script
     draws two label sets side by side and refuses files of different sections."""
     store = tmp_path / "tiny.zarr"
-    _tiny_store(store)
+    toy_store(store)
     bench_main = runpy.run_path(str(BENCH))["main"]
     pred = tmp_path / "p.npz"
     assert bench_main([str(store), "--steps", "1", "--crop", "16", "--batch", "4", "--base", "4",
@@ -165,10 +165,10 @@ def test_learnability_reference_scores_against_the_other_stores_labels(tmp_path,
     from scipy import ndimage
 
     store, thick, other = tmp_path / "a.zarr", tmp_path / "b.zarr", tmp_path / "c.zarr"
-    _tiny_store(store)
-    _tiny_store(thick, fault_fn=lambda f: ndimage.binary_dilation(
+    toy_store(store)
+    toy_store(thick, fault_fn=lambda f: ndimage.binary_dilation(
         f, structure=np.ones((1, 3, 3), bool)).astype(f.dtype))
-    _tiny_store(other, seismic_fn=lambda s: s + 1.0)
+    toy_store(other, seismic_fn=lambda s: s + 1.0)
     bench_main = runpy.run_path(str(BENCH))["main"]
     common = [str(store), "--steps", "1", "--crop", "16", "--batch", "4", "--base", "4",
               "--threads", "1", "--test-fraction", "0.4", "--device", "cpu", "--no-progress"]

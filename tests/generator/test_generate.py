@@ -2,28 +2,12 @@
 
 from __future__ import annotations
 
-import signal
-import subprocess
-import sys
-import time
-from pathlib import Path
-
 import numpy as np
 import pytest
 import zarr
 
 from demseis.cli import main
-
-
-def _tree_bytes(path: Path) -> dict[str, bytes]:
-    return {str(p.relative_to(path)): p.read_bytes() for p in sorted(path.rglob("*")) if p.is_file()}
-
-
-def assert_same_bytes(a: Path, b: Path) -> None:
-    ta, tb = _tree_bytes(a), _tree_bytes(b)
-    assert sorted(ta) == sorted(tb), set(ta) ^ set(tb)
-    different = [k for k in ta if ta[k] != tb[k]]
-    assert not different, f"files differ: {different[:5]}"
+from tests.generator._helpers import assert_same_bytes, tree_bytes
 
 
 def test_tiny_store_contents(tiny_store):
@@ -57,10 +41,10 @@ def test_same_command_same_bytes(tiny_store, tmp_path):
 
 
 def test_rerun_on_complete_store_is_a_no_op(tiny_store, capsys):
-    before = _tree_bytes(tiny_store)
+    before = tree_bytes(tiny_store)
     assert main(["generate", "--preset", "tiny", "--out", str(tiny_store), "--workers", "0", "--quiet"]) == 0
     assert "2 already done, 0 written now" in capsys.readouterr().out
-    assert _tree_bytes(tiny_store) == before
+    assert tree_bytes(tiny_store) == before
 
 
 def test_no_progress_bar_when_nothing_is_left(tiny_store, capsys):
@@ -113,12 +97,12 @@ def test_finalize_removes_temporary_files_of_a_killed_worker(tiny_store, tmp_pat
 def test_different_config_refused_without_overwrite(tiny_store, tmp_path, capsys):
     cfg = tmp_path / "c.toml"
     cfg.write_text("[sweep]\nseed = 99\n")
-    before = _tree_bytes(tiny_store)
+    before = tree_bytes(tiny_store)
     code = main(["generate", str(cfg), "--preset", "tiny", "--out", str(tiny_store), "--workers", "0"])
     err = capsys.readouterr().err
     assert code == 2
     assert "different config" in err and "sweep.seed" in err and "--overwrite" in err
-    assert _tree_bytes(tiny_store) == before
+    assert tree_bytes(tiny_store) == before
 
 
 def test_overwrite_replaces(tiny_store, tmp_path):
@@ -210,39 +194,6 @@ def test_preview_writes_figures(tiny_store, tmp_path):
     assert main(["preview", str(tiny_store), "--out", str(out), "--run", "7"]) == 2
 
 
-def _generate_cmd(cfg: Path, out: Path, *extra: str) -> list[str]:
-    return [sys.executable, "-m", "demseis", "generate", str(cfg), "--preset", "tiny", "--out", str(out),
-            "--quiet", *extra]
-
-
-@pytest.mark.slow
-def test_interrupted_then_resumed_is_identical(tmp_path):
-    cfg = tmp_path / "c.toml"
-    cfg.write_text("[sweep]\nn_runs = 6\n")
-    ref = tmp_path / "ref.zarr"
-    subprocess.run(_generate_cmd(cfg, ref, "--workers", "0"), check=True, capture_output=True)
-    out = tmp_path / "int.zarr"
-    proc = subprocess.Popen(_generate_cmd(cfg, out, "--workers", "0"), stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
-    done = 0
-    deadline = time.time() + 120
-    while time.time() < deadline and proc.poll() is None:
-        try:
-            done = int((zarr.open_array(str(out / "shard_done"), mode="r")[:] == 1).sum())
-        except Exception:
-            done = 0
-        if done >= 1:
-            break
-        time.sleep(0.02)
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
-    status = zarr.open_array(str(out / "shard_done"), mode="r")[:]
-    assert 1 <= int((status == 1).sum()) < 6, f"kill did not land mid-sweep: {status}"
-    assert main(["validate", str(out)]) == 0  # done shards are complete
-    subprocess.run(_generate_cmd(cfg, out, "--workers", "0"), check=True, capture_output=True)
-    assert_same_bytes(ref, out)
-
-
 @pytest.mark.slow
 def test_one_and_two_workers_identical(tiny_store, tmp_path):
     one = tmp_path / "one.zarr"
@@ -251,42 +202,6 @@ def test_one_and_two_workers_identical(tiny_store, tmp_path):
     assert main(["generate", "--preset", "tiny", "--out", str(two), "--workers", "2", "--quiet"]) == 0
     assert_same_bytes(tiny_store, one)
     assert_same_bytes(tiny_store, two)
-
-
-@pytest.mark.slow
-def test_killed_worker_is_retried(tmp_path):
-    """SIGKILL one dask worker process mid-sweep: the sweep still completes every shard."""
-    import psutil
-
-    from tests.generator._faults import dask_workers
-
-    cfg = tmp_path / "c.toml"
-    cfg.write_text("[sweep]\nn_runs = 4\nthrow_m = 200\n[model]\nwidth_m = 2400.0\nheight_m = 800.0\n")
-    out = tmp_path / "k.zarr"
-    proc = subprocess.Popen(_generate_cmd(cfg, out, "--workers", "2"), stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    killed = None
-    deadline = time.time() + 240
-    while time.time() < deadline and proc.poll() is None and killed is None:
-        workers = []
-        for p in dask_workers(proc.pid):
-            try:
-                if sum(p.cpu_times()[:2]) > 2.0:  # a forked worker is into its first DEM run
-                    workers.append(p)
-            except (psutil.NoSuchProcess, psutil.ZombieProcess, psutil.AccessDenied):
-                continue
-        if workers:
-            try:
-                workers[0].send_signal(signal.SIGKILL)
-                killed = workers[0].pid
-            except psutil.NoSuchProcess:
-                pass
-        time.sleep(0.1)
-    stdout, stderr = proc.communicate(timeout=300)
-    assert killed is not None, "never found a worker to kill"
-    assert proc.returncode == 0, stderr[-2000:]
-    assert "4 written now, 0 failed" in stdout
-    assert main(["validate", str(out)]) == 0
 
 
 @pytest.mark.slow

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -10,17 +9,11 @@ import pytest
 from scipy.integrate import quad
 
 from demseis.errors import InputError
-from demseis.generator.config import load_config
 from demseis.generator.engines.kinematic import fault_geometry, kinematic_state
 from demseis.generator.layout import grid_of
 from demseis.generator.runsetup import run_info
 from demseis.generator.sampling import plan_run
-
-
-def kinematic_cfg(preset: str = "tiny", **model):
-    cfg = load_config(preset=preset)
-    return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, engine="kinematic",
-                                                              **model))
+from tests.generator._helpers import kinematic_cfg
 
 
 @pytest.fixture(scope="module")

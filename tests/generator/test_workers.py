@@ -12,8 +12,8 @@ import pytest
 
 from demseis.errors import InputError
 from demseis.generator.workers import worker_start_method
-from tests.generator._faults import ROOT
-from tests.generator.test_generate import assert_same_bytes
+from tests._helpers import ROOT
+from tests.generator._helpers import assert_same_bytes
 
 
 def test_default_method_is_forkserver_where_available(monkeypatch):

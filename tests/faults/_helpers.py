@@ -1,4 +1,6 @@
-"""Helpers of the fault-injection tests: run the CLI in its own process group, interrupt it."""
+"""Helpers of the fault-injection tests: run the CLI in its own process group, find its dask
+workers, wait for shards, interrupt it. ``ROOT`` (the repository root) is re-exported from
+``tests._helpers``."""
 
 from __future__ import annotations
 
@@ -9,8 +11,10 @@ import sys
 import time
 from pathlib import Path
 
+from tests._helpers import ROOT
 
-ROOT = Path(__file__).resolve().parents[2]
+__all__ = ["INTERRUPTED", "ROOT", "dask_workers", "done_shards", "interrupt", "spawn", "wait_for"]
+
 INTERRUPTED = "demseis: interrupted; run the same command to resume"
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from demseis.cli import main
-from tests.generator.test_generate import assert_same_bytes
+from tests.generator._helpers import assert_same_bytes
 
 
 def _gen(out: Path, *extra: str) -> list[str]:

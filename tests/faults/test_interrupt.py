@@ -9,8 +9,8 @@ import sys
 
 import pytest
 
-from tests.generator._faults import INTERRUPTED, ROOT, done_shards, interrupt, spawn, wait_for
-from tests.generator.test_generate import assert_same_bytes
+from tests.faults._helpers import INTERRUPTED, ROOT, done_shards, interrupt, spawn, wait_for
+from tests.generator._helpers import assert_same_bytes
 
 CFG = "[sweep]\nn_runs = 8\n"
 

@@ -15,8 +15,8 @@ import psutil
 import pytest
 
 from demseis.cli import main
-from tests.generator._faults import ROOT, dask_workers, spawn
-from tests.generator.test_generate import assert_same_bytes
+from tests.faults._helpers import ROOT, dask_workers, spawn
+from tests.generator._helpers import assert_same_bytes
 
 N_TRIALS = 20
 
