@@ -18,11 +18,11 @@ import pytest
 
 from demseis.datasets import shard_status, validate_store
 from demseis.datasets.lock import lock_path
+from tests._helpers import ROOT
 from tests.datasets._helpers import digest
 
 pytestmark = pytest.mark.slow
 
-ROOT = Path(__file__).resolve().parents[2]
 MINI = """
 name = "mini"
 [sweep]

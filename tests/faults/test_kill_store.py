@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from demseis.datasets import open_store, read_particles, shard_status, validate_store, write_shard
+from tests._helpers import ROOT
 from tests.datasets._helpers import make_store, shard_data
 
-ROOT = Path(__file__).resolve().parents[2]
 SHAPE = (24, 32)
 S = 6
 
