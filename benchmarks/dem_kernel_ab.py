@@ -45,8 +45,9 @@ def capture(preset: str, config: str | None, run: int, call: int) -> list:
     import numpy as np
 
     import demseis.dem._kernels as K
-    from demseis.generator import pipeline as P
     from demseis.generator.config import load_config
+    from demseis.generator.engines import get_engine
+    from demseis.generator.sampling import plan_run
 
     cfg = load_config(config, preset=preset)
     orig, seen, state = K.run_steps, [0], []
@@ -60,7 +61,7 @@ def capture(preset: str, config: str | None, run: int, call: int) -> list:
 
     K.run_steps = spy
     try:
-        P.simulate_run(cfg, P.plan_run(cfg, run))
+        get_engine("dem").simulate(cfg, plan_run(cfg, run))
     except _Captured:
         return state
     finally:
