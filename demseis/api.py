@@ -137,7 +137,7 @@ class Store:
         cell = f"{grid.get('cell_m', '?')} m cells" if domain == "depth" else "time samples"
         n_done = int(self.done.sum())
         return (f"<demseis.Store {str(self.path)!r}: {len(self)} samples ({n_done} done) from "
-                f"{lay.n_shards} DEM runs of {lay.samples_per_shard}; {h} x {w} {cell}; "
+                f"{lay.n_shards} runs ({lay.samples_per_shard} samples each); {h} x {w} {cell}; "
                 f"arrays {', '.join(self.arrays)}; {len(lay.params)} per-sample parameters>")
 
     # ---- views ------------------------------------------------------------------------------
