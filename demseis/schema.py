@@ -150,11 +150,6 @@ def stored_arrays(options: Iterable[str] = ()) -> tuple[str, ...]:
     return tuple(n for n, a in SAMPLE_ARRAYS.items() if a.option is None or a.option in on)
 
 
-def label_names() -> tuple[str, ...]:
-    """Names of every label array, in store order."""
-    return tuple(n for n, a in SAMPLE_ARRAYS.items() if a.role == "label")
-
-
 def engine_labels() -> tuple[str, ...]:
     """The labels every engine makes itself (no producer), in store order."""
     return tuple(n for n, a in SAMPLE_ARRAYS.items() if a.role == "label" and a.producer is None)

@@ -17,8 +17,9 @@ import numpy as np
 
 from demseis.errors import InputError
 from demseis.generator.config import Config
-from demseis.generator.engines import EngineRun, State
-from demseis.generator.layout import array_dtypes, grid_of, param_codes, param_dtypes, sample_shape, time_axis_of
+from demseis.generator.engines import Engine, EngineRun, State
+from demseis.generator.layout import (array_dtypes, grid_of, param_codes, param_dtypes,
+                                      sample_shape, time_axis_of)
 from demseis.generator.sampling import Render, RunSpec
 from demseis.labels import sample_facts
 from demseis.schema import SAMPLE_ARRAYS, engine_labels
@@ -51,7 +52,7 @@ def renders_by_snapshot(spec: RunSpec) -> list[tuple[int, list[Render]]]:
     return sorted(by_snap.items())
 
 
-def render_run(cfg: Config, run: EngineRun, engine: Any) -> ShardData:
+def render_run(cfg: Config, run: EngineRun, engine: Engine) -> ShardData:
     """Every sample of ``run``: the states ``engine`` makes of its rendered snapshots, imaged."""
     arrays, params = empty_shard(cfg, run.spec)
     groups = renders_by_snapshot(run.spec)
@@ -95,14 +96,14 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
     vp_g, rho_g = state.vp_m_s, state.rho_kg_m3
     impedance = vp_g * rho_g
     domain = "depth" if t_s is None else "time"
-    # one imaging call per (mode, options key), all its frequencies at once
-    wanted: dict[tuple, set[float]] = {}
+    # one imaging call per (mode, options key), all its frequencies at once; the first render
+    # of a group carries the group's mode and options
+    wanted: dict[tuple, tuple[Render, set[float]]] = {}
     for r in renders:
-        wanted.setdefault(_imaging_key(r), set()).add(r.freq_hz)
+        wanted.setdefault(_imaging_key(r), (r, set()))[1].add(r.freq_hz)
     images = {}
-    for key, fset in wanted.items():
+    for key, (first, fset) in wanted.items():
         freqs = sorted(fset)
-        first = next(r for r in renders if _imaging_key(r) == key)
         secs = imaged_sections(first.imaging, vp_g, rho_g, grid.cell_m, freqs, domain, t_s=t_s,
                                **first.values)
         images.update({(key, f): sec for f, sec in zip(freqs, secs)})

@@ -243,8 +243,9 @@ def warm_numba_cache() -> None:
 
 
 def run_cost(cfg: Config, run: int) -> float:
-    """Relative cost of run ``run`` by its engine (:meth:`demseis.generator.engines.Engine.cost`); the sweep starts the
-    costliest runs first."""
+    """Relative cost of run ``run`` by its engine
+    (:meth:`demseis.generator.engines.Engine.cost`); the sweep starts the costliest runs
+    first."""
     return get_engine(cfg.model.engine).cost(cfg, run_params(cfg, run))
 
 
@@ -255,7 +256,8 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
     n_runs = cfg.sweep.n_runs if pending is None else pending
     h, w = sample_shape(cfg)
     bytes_per_sample = sum(np.dtype(d).itemsize for d in array_dtypes(cfg).values()) * h * w
-    what, secs = get_engine(cfg.model.engine).describe(cfg)
+    engine = get_engine(cfg.model.engine)
+    what, secs = engine.describe(cfg)
     return [
         f"config: {cfg.name} (seed {cfg.sweep.seed})",
         f"{cfg.model.engine} runs: {n_runs} to compute (of {cfg.sweep.n_runs}); {what}",
@@ -264,7 +266,7 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
         f"sample shape: {h} x {w} ({cfg.output.domain} domain; {grid.cell_m:g} m cells); arrays: "
         + ", ".join(f"{k} {v}" for k, v in array_dtypes(cfg).items()),
         f"size on disk: at most {n_runs * S * bytes_per_sample / 2**20:,.1f} MiB (uncompressed)"
-        + (" plus particle snapshots" if get_engine(cfg.model.engine).particles else ""),
+        + (" plus particle snapshots" if engine.particles else ""),
         f"estimated time: up to ~{secs * n_runs / 60:,.1f} core-minutes "
         f"(~{secs:,.0f} s per run on one core at most; divide by the worker count for wall time)",
     ]

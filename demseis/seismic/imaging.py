@@ -34,10 +34,6 @@ from demseis.seismic.forward import synthetic_sections
 from demseis.seismic.psf import psf_sections
 
 
-def _no_key(values: Mapping[str, Any]) -> tuple:
-    return ()
-
-
 def _title(name: str) -> Callable[[Mapping[str, Any]], str]:
     return lambda values: name
 
