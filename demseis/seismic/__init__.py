@@ -8,6 +8,10 @@ The per-snapshot render the generator does::
     sections = synthetic_sections(vp_g, rho_g, grid.cell_m, freqs_hz)        # (nf, nz, nx)
     # or, imaged through a dip-limited 2-D point-spread function:
     sections = psf_sections(vp_g, rho_g, grid.cell_m, freqs_hz, max_angle_deg=30.0)
+    # or, with beds finer than the elements (the ``strata`` rendering), looked up at the
+    # reference coordinates (x0, y0) of each cell:
+    strata = draw_strata(unit_bottom_m, unit_top_m, layer_props, width_m, BedModel(), rng)
+    vp_g, rho_g = strata_properties(strata, x0, y0, unit)
     noisy = add_noise(sections[k], snr_db, "band", rng)
 
 See ``docs/seismic.md`` for the physics, conventions and measured accuracy and speed.
@@ -34,11 +38,13 @@ from demseis.seismic.properties import (
 from demseis.seismic.imaging import ImagingMode, imaged_sections, imaging_mode
 from demseis.seismic.psf import psf_sections
 from demseis.seismic.raster import rasterise
+from demseis.seismic.strata import BedModel, Strata, draw_strata, strata_properties
 from demseis.seismic.wavelet import ricker
 
 __all__ = [
     "rasterise", "ricker", "reflectivity", "impedance", "convolve", "PropertyModel",
     "LayerProperties", "draw_layer_properties", "element_properties", "property_grids", "smooth",
     "synthetic_sections", "interface_times", "time_axis", "depth_to_time", "add_noise", "rms",
-    "snr_db", "psf_sections", "imaged_sections", "ImagingMode", "imaging_mode",
+    "snr_db", "psf_sections", "imaged_sections", "ImagingMode", "imaging_mode", "BedModel",
+    "Strata", "draw_strata", "strata_properties",
 ]

@@ -365,3 +365,77 @@ def fill_empty_constant(mean, count, value):
             if count[i, j] == 0:
                 for q in range(k):
                     mean[i, j, q] = value[q]
+
+
+@njit(cache=True)
+def strata_lookup(x, y, unit, unit_top, n_pre, unit_first_bed, bed_bottom, undulation,
+                  und_bound, bed_vp, bed_rho, lat_amp_vp, lat_amp_rho, lateral, dx, out_vp,
+                  out_rho):
+    """Vp and density of the bed containing each reference point (x, y) of a stratigraphy.
+
+    Parameters
+    ----------
+    x, y : (n,) float64 reference coordinates (m), y up.
+    unit : (n,) int64 unit of each point, or -1: the pre-kinematic unit containing y
+        (units 0 .. n_pre-1 bottom to top, contiguous; below the lowest: 0, above: n_pre-1).
+    unit_top : (U,) float64 top of each unit (m).
+    n_pre : number of pre-kinematic units (>= 1).
+    unit_first_bed : (U + 1,) int64; the beds of unit u are unit_first_bed[u] .. [u + 1] - 1,
+        bottom to top.
+    bed_bottom : (B,) float64 nominal bottom of each bed (m), ascending within a unit.
+    undulation : (B, K) float64 displacement (m) of each bed's bottom boundary at x = k dx
+        (0 for the first bed of a unit: unit boundaries are flat).
+    und_bound : (B,) float64 max |undulation[j]|: farther from the nominal boundary, the side
+        of y is known without interpolating.
+    bed_vp, bed_rho : (B,) float64 Vp (m/s) and density (kg/m^3) of each bed.
+    lat_amp_vp, lat_amp_rho : relative amplitude of the lateral variation of Vp and density.
+    lateral : (B, K) float64 each bed's lateral field (unit variance) at x = k dx.
+    dx : table spacing (m); x is clamped to [0, (K - 1) dx].
+    out_vp, out_rho : (n,) float64 output, written.
+
+    Tables are read by linear interpolation, ``t[k] (1 - w) + t[k + 1] w``. Bed j holds the
+    points with bottom_j(x) <= y < bottom_{j+1}(x) (the first bed of a unit also everything
+    below, the last everything above). The nominal bed is found by binary search, then moved
+    down or up while y lies across an undulating boundary.
+    """
+    n = x.shape[0]
+    kmax = lateral.shape[1] - 2
+    for i in range(n):
+        yi = y[i]
+        s = min(max(x[i] / dx, 0.0), kmax + 1.0)
+        k = min(int(s), kmax)
+        w = s - k
+        u = unit[i]
+        if u < 0:
+            lo = 0
+            hi = n_pre - 1
+            while lo < hi:  # first pre-kinematic unit with y < its top (clamped to the last)
+                mid = (lo + hi) // 2
+                if yi < unit_top[mid]:
+                    hi = mid
+                else:
+                    lo = mid + 1
+            u = lo
+        first = unit_first_bed[u]
+        last = unit_first_bed[u + 1] - 1
+        lo = first
+        hi = last
+        while lo < hi:  # last bed whose nominal bottom is <= y (clamped to the first)
+            mid = (lo + hi + 1) // 2
+            if bed_bottom[mid] <= yi:
+                lo = mid
+            else:
+                hi = mid - 1
+        j = lo
+        while j > first and yi - bed_bottom[j] <= und_bound[j]:
+            if yi >= bed_bottom[j] + (undulation[j, k] * (1.0 - w) + undulation[j, k + 1] * w):
+                break
+            j -= 1
+        while j < last and bed_bottom[j + 1] - yi <= und_bound[j + 1]:
+            if yi < bed_bottom[j + 1] + (undulation[j + 1, k] * (1.0 - w)
+                                         + undulation[j + 1, k + 1] * w):
+                break
+            j += 1
+        f = lateral[j, k] * (1.0 - w) + lateral[j, k + 1] * w
+        out_vp[i] = bed_vp[j] * (1.0 + lat_amp_vp * f)
+        out_rho[i] = bed_rho[j] * (1.0 + lat_amp_rho * f)
