@@ -6,6 +6,12 @@ Public API (see docs/interfaces.md and docs/dem.md)::
     asm = build_assembly(5000.0, 2770.0, n_layers=48, rng=np.random.default_rng(0))
     snaps = simulate(asm, NormalFault(), Material(), n_snapshots=6)
 
+Reference coordinates of points of a deformed snapshot (where their rock was in the undeformed
+model, or where it was deposited)::
+
+    from demseis.dem import reference_map
+    rm = reference_map(snaps, k, points_xy)   # rm.ref_xy, rm.layer, rm.deposited, rm.element
+
 ``settle_pack`` (+ ``cache_dir``) makes the settled packing reusable across runs that share a
 geometry; ``build_assembly(..., pack=...)`` then only assigns layers.
 """
@@ -14,7 +20,15 @@ from demseis.dem.assembly import Assembly, Pack, build_assembly, settle_pack
 from demseis.dem.engine import Engine, time_step
 from demseis.dem.basement import BasementFault, FaultSystem
 from demseis.dem.fault import simulate
+from demseis.dem.reference import (
+    MapInfo,
+    ReferenceMap,
+    element_maps,
+    reference_coordinates,
+    reference_map,
+)
 from demseis.dem.types import BRITTLE, Material, NormalFault
 
-__all__ = ["BRITTLE", "Assembly", "BasementFault", "Engine", "FaultSystem", "Material", "NormalFault", "Pack",
-           "build_assembly", "settle_pack", "simulate", "time_step"]
+__all__ = ["BRITTLE", "Assembly", "BasementFault", "Engine", "FaultSystem", "MapInfo", "Material",
+           "NormalFault", "Pack", "ReferenceMap", "build_assembly", "element_maps",
+           "reference_coordinates", "reference_map", "settle_pack", "simulate", "time_step"]

@@ -13,6 +13,9 @@ Public API (see docs/labels.md)::
     # engine labels)
     facts = sample_facts(maps)                               # has_fault, n_faults, max_slip_m
 
+Shared Numba helper: :func:`build_cell_list` (a cell list of points, callable from other
+stages' kernels).
+
 Shape measures of label masks (diagnostics): :func:`loop_count`, :func:`rung_fraction`,
 :func:`skeleton_length_cells`, :func:`mask_thickness_cells`.
 
@@ -22,6 +25,7 @@ Modules: ``maps`` (label_maps), ``raster`` (elements to grid), ``traces`` (the
 ``masks`` and ``centreline`` (mask tools), ``measures``, ``strain``, ``config``, ``_kernels``.
 """
 
+from demseis.labels._kernels import build_cell_list
 from demseis.labels.config import LabelConfig
 from demseis.labels.maps import label_maps, sample_facts
 from demseis.labels.measures import (
@@ -47,6 +51,7 @@ __all__ = [
     "StrainResult",
     "StrainState",
     "Traces",
+    "build_cell_list",
     "damage_map",
     "displacement_history",
     "element_strain",
