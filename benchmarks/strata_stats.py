@@ -20,7 +20,7 @@ import numpy as np
 
 from demseis.diagnostics.strata_stats import (adjacent_trace_correlation, column_reflectivity,
                                               default_setup, flat_section,
-                                              zero_crossings_per_100)
+                                              zero_crossings)
 
 
 def main() -> None:
@@ -35,7 +35,7 @@ def main() -> None:
         for f in (20.0, 35.0, 60.0):
             sec = flat_section(s, f)
             rows.setdefault(f"corr_{f:g}hz", []).append(adjacent_trace_correlation(sec))
-            rows.setdefault(f"zero_crossings_{f:g}hz", []).append(zero_crossings_per_100(sec))
+            rows.setdefault(f"zero_crossings_{f:g}hz", []).append(zero_crossings(sec))
     print(json.dumps({k: {"mean": round(float(np.mean(v)), 3), "min": round(min(v), 3),
                           "max": round(max(v), 3)} for k, v in rows.items()}))
 

@@ -266,6 +266,38 @@ _DECLARED: tuple[Param, ...] = (
        doc="std of the Gaussian smoothing of the property grids (0 = off)"),
     _p("median_size_cells", int, "run", 3, 1, 9, unit="cells",
        doc="width of the square median filter, odd (1 = off)"),
+    # ---- per run: the beds of the strata rendering (demseis.seismic.BedModel) -------------
+    _p("bed_thickness_median_m", float, "run", 4.0, 0.1, 100.0, unit="m",
+       doc="strata: median bed thickness (lognormal); most beds below the tuning thickness"),
+    _p("bed_thickness_log_sigma", float, "run", 0.8, 0.0, 3.0,
+       doc="strata: standard deviation of ln(bed thickness)"),
+    _p("bed_thickness_min_m", float, "run", 0.5, 0.1, 100.0, unit="m",
+       doc="strata: thinnest bed (at most the median)"),
+    _p("bed_thickness_max_m", float, "run", 40.0, 0.1, 1000.0, unit="m",
+       doc="strata: thickest bed (at least the median)"),
+    _p("facies_contrast", float, "run", 0.15, 0.0, 1.0,
+       doc="strata: difference of ln(impedance) between the two facies of a layer's beds"),
+    _p("facies_switch_probability", float, "run", 0.3, 0.0, 1.0,
+       doc="strata: probability that a bed's facies differs from the one below"),
+    _p("fluctuation_sigma", float, "run", 0.03, 0.0, 0.5,
+       doc="strata: std of the bed-to-bed ln(impedance) fluctuation (Laplace, AR(1))"),
+    _p("fluctuation_ar1", float, "run", 0.5, 0.0, 0.99,
+       doc="strata: lag-one correlation (bed index) of that fluctuation"),
+    _p("vp_gradient_per_km", float, "run", 0.05, 0.0, 1.0,
+       doc="strata: relative increase of Vp per km of burial (reference depth)"),
+    _p("rho_gradient_per_km", float, "run", 0.015, 0.0, 0.5,
+       doc="strata: relative increase of density per km of burial"),
+    _p("lateral_amplitude", float, "run", 0.03, 0.0, 0.2,
+       doc="strata: relative std of Vp along a bed (density a quarter of it)"),
+    _p("lateral_correlation_m", float, "run", 27.0, 1.0, 1.0e6, unit="m",
+       doc="strata: correlation length of the variation along a bed"),
+    _p("boundary_undulation", float, "run", 0.1, 0.0, 0.17,
+       doc="strata: std of a bed boundary's vertical wobble, as a fraction of the thinner bed"),
+    _p("undulation_correlation_m", float, "run", 100.0, 1.0, 1.0e6, unit="m",
+       doc="strata: correlation length of that wobble"),
+    _p("fault_zone_impedance", float, "run", 0.0, -0.5, 0.5,
+       doc="strata rendering: relative change of the impedance in a fault core (damage 2; "
+           "half of it in the damage zone, damage 1): negative dims the fault zone"),
     # ---- per sample: rendering -----------------------------------------------------------
     _p("freq_hz", float, "sample", 40.0, 1.0, 500.0, unit="Hz", doc="Ricker peak frequency"),
     _p("snr_db", float, "sample", INF, -40.0, INF, unit="dB",
@@ -307,6 +339,16 @@ _DECLARED: tuple[Param, ...] = (
        doc="sections and labels in depth cells, or on a two-way-time axis"),
     _p("dt_s", float, "sweep", 0.002, 1.0e-4, 0.02, unit="s", section="output",
        doc="time-domain sample interval"),
+    _p("trace_spacing_m", float, "sweep", 0.0, 0.0, 1000.0, unit="m", section="output",
+       doc="distance between the output traces (columns), independent of the model and its "
+           "elements, as a survey's trace spacing (12.5-25 m); 0 = the grid cell (grid.cell_m)"),
+    _p("rendering", str, "sweep", "elements", choices=("elements", "strata"), section="output",
+       doc="elements: rock properties per DEM element, rasterised on the grid (the paper's "
+           "mode); strata: a fine stratigraphy (beds below 1 m to tens of metres) looked up at "
+           "each point's reference coordinates (demseis.generator.survey, docs/seismic.md)"),
+    _p("strata_dz_m", float, "sweep", 1.0, 0.05, 1.0, unit="m", section="output",
+       doc="strata rendering: vertical step of the stratigraphy lookup, at most (the grid cell "
+           "is split into an odd number of steps no larger)"),
 )
 
 #: every declared parameter by name
@@ -323,6 +365,13 @@ MATERIAL_FIELDS: dict[str, str] = {
     "friction": "friction", "cohesion_n": "cohesion_n", "bond_strain": "bond_strain",
     "model": "contact_model", "damping_scale": "damping_scale", "gravity_m_s2": "gravity_m_s2",
 }
+
+#: fields of :class:`demseis.seismic.BedModel` (the same names)
+BED_FIELDS: tuple[str, ...] = (
+    "bed_thickness_median_m", "bed_thickness_log_sigma", "bed_thickness_min_m",
+    "bed_thickness_max_m", "facies_contrast", "facies_switch_probability", "fluctuation_sigma",
+    "fluctuation_ar1", "vp_gradient_per_km", "rho_gradient_per_km", "lateral_amplitude",
+    "lateral_correlation_m", "boundary_undulation", "undulation_correlation_m")
 
 #: scalar fields of :class:`demseis.seismic.PropertyModel` (the same names)
 PROPERTY_FIELDS: tuple[str, ...] = ("gardner_a", "gardner_b", "vp_scatter", "rho_scatter",

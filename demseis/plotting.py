@@ -209,7 +209,7 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     p = sample.params
     noise = p["noise_kind"]
     imaging = f", {imaging_mode(p['imaging']).title(p)}" if "imaging" in p else ""
-    w_m = grid["nx"] * grid["cell_m"]
+    w_m = grid["nx"] * grid.get("dx_m", grid["cell_m"])
     h_m = grid["nz"] * grid["cell_m"]
     extent = (0, w_m / 1000, h_m / 1000, 0)
     clip = float(np.percentile(np.abs(sec), 99)) or 1.0

@@ -298,7 +298,7 @@ def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.n
     """Row dimension name and coordinate values of the sample axes, from the ``grid`` attr.
 
     Cell centres as :class:`demseis.types.Grid` defines them: ``x = x0_m + (j + 0.5)
-    cell_m``, depth below the top ``(i + 0.5) cell_m``; time-domain stores (``domain = "time"``)
+    cell_m`` (``dx_m``, the trace spacing, where the store has it), depth below the top ``(i + 0.5) cell_m``; time-domain stores (``domain = "time"``)
     have rows ``twt = k dt_s`` (the axis of :func:`demseis.seismic.time_axis`). No coordinates
     when the attr is absent or does not match the sample shape.
     """
@@ -308,7 +308,7 @@ def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.n
     row_dim = "twt" if time else "depth"
     try:
         cell, nx = float(grid["cell_m"]), int(grid["nx"])
-        x = float(grid["x0_m"]) + (np.arange(nx) + 0.5) * cell
+        x = float(grid["x0_m"]) + (np.arange(nx) + 0.5) * float(grid.get("dx_m", cell))
         rows = (np.arange(int(grid["nt"])) * float(grid["dt_s"]) if time
                 else (np.arange(int(grid["nz"])) + 0.5) * cell)
     except (KeyError, TypeError, ValueError):

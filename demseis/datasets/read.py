@@ -166,7 +166,9 @@ def export_segy(store: str | Path, sample: int, out: str | Path, overwrite: bool
     dt_s = grid.get("dt_s")
     if domain == "time" and (dt_s is None or not math.isfinite(float(dt_s))):
         raise StoreError("store grid says domain 'time' but has no valid 'dt_s'")
+    dx = grid.get("dx_m")
     return write_segy(section, out, x0_m=float(grid["x0_m"]), cell_m=float(grid["cell_m"]),
+                      trace_spacing_m=None if dx is None else float(dx),
                       top_m=float(grid["top_m"]), domain=domain, dt_s=dt_s, overwrite=overwrite,
                       note=f"store {Path(store).name} sample {sample}")
 

@@ -1,7 +1,7 @@
 """Measures of the ``strata`` stratigraphy and of the sections it gives, against field targets.
 
-- :func:`adjacent_trace_correlation`, :func:`zero_crossings_per_100`: the two section measures
-  of ``../shared/field/README.md`` (F3 at 4 ms: 0.92 and 34);
+- the two section measures of ``../shared/field/README.md`` (F3 at 4 ms: 0.92 and 34) are
+  :func:`demseis.evaluation.realism.adjacent_trace_correlation` and ``zero_crossings``;
 - :func:`flat_section`: a noise-free time section of an undeformed stratigraphy (reference
   coordinates = section coordinates), traces every ``dx_m``, a fine vertical grid;
 - :func:`column_reflectivity`: the reflection coefficients of one densely sampled column, in
@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from demseis.evaluation.realism import adjacent_trace_correlation, zero_crossings
 from demseis.seismic import (BedModel, PropertyModel, Strata, draw_layer_properties,
                              draw_strata, interface_times, reflectivity, strata_properties,
                              synthetic_sections)
@@ -26,32 +27,6 @@ def default_setup(seed: int = 0, model: BedModel | None = None, n_layers: int = 
     props = draw_layer_properties(n_layers, PropertyModel(), rng)
     edges = np.linspace(0.0, height_m, n_layers + 1)
     return draw_strata(edges[:-1], edges[1:], props, width_m, model or BedModel(), rng)
-
-
-def adjacent_trace_correlation(section: np.ndarray, window: int = 32) -> float:
-    """Median Pearson correlation of neighbouring traces over half-overlapping windows.
-
-    ``section`` is (nt, nx), time down; windows of ``window`` samples start every
-    ``window // 2``; a window where either trace is constant is skipped.
-    """
-    s = np.asarray(section, dtype=np.float64)
-    nt = s.shape[0]
-    r = []
-    for t0 in range(0, nt - window + 1, window // 2):
-        w = s[t0:t0 + window]
-        w = w - w.mean(axis=0)
-        a, b = w[:, :-1], w[:, 1:]
-        den = np.sqrt((a * a).sum(axis=0) * (b * b).sum(axis=0))
-        ok = den > 0
-        r.append((a * b).sum(axis=0)[ok] / den[ok])
-    return float(np.median(np.concatenate(r)))
-
-
-def zero_crossings_per_100(section: np.ndarray) -> float:
-    """Median over traces of the sign changes per 100 samples of a (nt, nx) section."""
-    s = np.asarray(section, dtype=np.float64)
-    changes = (s[:-1] * s[1:] < 0).sum(axis=0)
-    return float(np.median(changes) * 100.0 / (s.shape[0] - 1))
 
 
 def flat_section(strata: Strata, freq_hz: float, dx_m: float = 25.0, dz_m: float = 0.5,
@@ -122,3 +97,7 @@ def column_reflectivity(strata: Strata, x_m: float = 0.0, dz_m: float = 0.25,
         "rms_time": float(np.sqrt(np.mean(rt ** 2))),
         "n_interfaces": int(nonzero.size),
     }
+
+
+__all__ = ["adjacent_trace_correlation", "column_reflectivity", "default_setup", "flat_section",
+           "zero_crossings"]

@@ -41,9 +41,9 @@ from demseis.generator.params import (
     spec_values_hint,
 )
 from demseis.labels import LabelConfig
-from demseis.parameters import PARAMS, PROPERTY_FIELDS, SCENARIO, Param
+from demseis.parameters import BED_FIELDS, PARAMS, PROPERTY_FIELDS, SCENARIO, Param
 from demseis.registry import ENGINES
-from demseis.seismic import PropertyModel
+from demseis.seismic import BedModel, PropertyModel
 
 PRESETS = ("tiny", "quick", "seed", "variety")
 
@@ -311,6 +311,15 @@ def _cross_checks(cfg: Config) -> None:
                 PropertyModel(**{**cfg.properties, key: value}).validate()
             except ConfigError as exc:
                 raise ConfigError(f"sweep.{key}: {exc}") from None
+    # and of every bed parameter a valid BedModel (thinnest <= median <= thickest bed)
+    fixed = {k: (s.value if isinstance(s, Fixed) else PARAMS[k].default)
+             for k, s in ((k, cfg.sweep.params[k]) for k in BED_FIELDS)}
+    for key in BED_FIELDS:
+        for value in _spec_candidates(cfg.sweep.params[key]):
+            try:
+                BedModel(**{**fixed, key: value}).validate()
+            except ConfigError as exc:  # BedModel names its fields strata.<name>
+                raise ConfigError(str(exc).replace("strata.", "sweep.")) from None
     # the engine's own rules (the DEM's: elements fit, a fault can form, quasi-static)
     ENGINES.get(cfg.model.engine).check(cfg)
 

@@ -11,6 +11,7 @@ import numpy as np
 
 from demseis.generator.config import Config
 from demseis.generator.params import spec_values_hint
+from demseis.generator.survey import trace_x
 from demseis.parameters import SCENARIO, STORED
 from demseis.schema import SAMPLE_ARRAYS, stored_arrays
 from demseis.seismic import time_axis
@@ -52,10 +53,13 @@ def time_axis_of(cfg: Config) -> np.ndarray | None:
 
 
 def sample_shape(cfg: Config) -> tuple[int, int]:
-    """(H, W) of every stored sample: grid cells (depth) or (time samples, columns)."""
+    """(H, W) of every stored sample: (grid rows or time samples, traces); the traces are the
+    grid's columns unless ``[output] trace_spacing_m`` says otherwise
+    (:func:`demseis.generator.survey.trace_x`)."""
     grid = grid_of(cfg)
     t_s = time_axis_of(cfg)
-    return grid.shape if t_s is None else (int(t_s.size), grid.nx)
+    width = int(trace_x(cfg).size)
+    return (grid.nz, width) if t_s is None else (int(t_s.size), width)
 
 
 def array_dtypes(cfg: Config) -> dict[str, str]:

@@ -20,10 +20,14 @@ from demseis.generator.config import Config
 from demseis.generator.engines import Engine, EngineRun, State
 from demseis.generator.layout import (array_dtypes, grid_of, param_codes, param_dtypes,
                                       sample_shape, time_axis_of)
+from demseis.generator.runsetup import property_model_of
 from demseis.generator.sampling import Render, RunSpec
+from demseis.generator.survey import (cell_rows, coarse_velocity, damage_factor, fill_gaps,
+                                      fine_depths, labels_at_traces, nearest_columns, on_grid,
+                                      substeps, to_time, trace_spacing, trace_x)
 from demseis.labels import sample_facts
 from demseis.schema import SAMPLE_ARRAYS, engine_labels
-from demseis.seismic import add_noise, depth_to_time, imaged_sections, imaging_mode
+from demseis.seismic import add_noise, imaged_sections, imaging_mode, strata_properties
 from demseis.types import Snapshot
 
 
@@ -91,10 +95,9 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
     """
     grid = grid_of(cfg)
     t_s = time_axis_of(cfg)
-    maps = state_maps(state, arrays)
+    maps = labels_at_traces(cfg, state_maps(state, arrays))
     facts = sample_facts(maps)
-    vp_g, rho_g = state.vp_m_s, state.rho_kg_m3
-    impedance = vp_g * rho_g
+    img = imaging_input(cfg, state, maps, run.spec.params)
     domain = "depth" if t_s is None else "time"
     # one imaging call per (mode, options key), all its frequencies at once; the first render
     # of a group carries the group's mode and options
@@ -104,15 +107,17 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
     images = {}
     for key, (first, fset) in wanted.items():
         freqs = sorted(fset)
-        secs = imaged_sections(first.imaging, vp_g, rho_g, grid.cell_m, freqs, domain, t_s=t_s,
-                               **first.values)
+        secs = imaged_sections(first.imaging, img.vp, img.rho, img.dz_m, freqs, domain,
+                               t_s=t_s, col_step_m=img.col_step_m, **first.values)
+        if domain == "depth" and img.substeps > 1:
+            secs = cell_rows(secs, img.substeps)
         images.update({(key, f): sec for f, sec in zip(freqs, secs)})
+    impedance = img.impedance
     if t_s is not None:
-        for name in maps:
-            maps[name] = depth_to_time(maps[name], vp_g, grid.cell_m, t_s, method="nearest",
-                                       fill=SAMPLE_ARRAYS.get(name).fill)
-        impedance = depth_to_time(impedance, vp_g, grid.cell_m, t_s, method="nearest",
-                                  fill=SAMPLE_ARRAYS.get("impedance").fill)
+        fills = {name: SAMPLE_ARRAYS.get(name).fill for name in [*maps, "impedance"]}
+        maps = to_time(maps, img.vp_cell, grid.cell_m, t_s, fills)
+        impedance = to_time({"impedance": impedance}, img.vp_cell, grid.cell_m, t_s,
+                            fills)["impedance"]
     rendered = {"impedance": impedance}
     codes = param_codes()
     for r in renders:
@@ -129,6 +134,71 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
             if key in codes:
                 value = codes[key].index(value)
             params[key][i] = value
+
+
+@dataclass(frozen=True)
+class ImagingInput:
+    """What one state's sections are imaged from, at the traces.
+
+    Attributes
+    ----------
+    vp, rho : (rows, ntr) Vp and density: the grid's cells (``elements``) or the strata
+        points (``strata``, ``substeps`` per cell).
+    dz_m : their row height; col_step_m : the trace spacing where it is not ``dz_m`` (else None).
+    substeps : rows per grid cell (1 for ``elements``).
+    vp_cell : (nz, ntr) the interval velocity of each grid cell (labels to time).
+    impedance : (nz, ntr) the impedance of each grid cell (the optional stored array).
+    """
+
+    vp: np.ndarray
+    rho: np.ndarray
+    dz_m: float
+    col_step_m: float | None
+    substeps: int
+    vp_cell: np.ndarray
+    impedance: np.ndarray
+
+
+def imaging_input(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
+                  params: Mapping[str, Any]) -> ImagingInput:
+    """The property columns of ``state`` at the traces, by the sweep's ``rendering``
+    (:mod:`demseis.generator.survey`); ``maps`` are its labels at the traces, ``params`` the
+    run's parameters.
+
+    Raises
+    ------
+    InputError
+        ``rendering = "strata"`` and the engine's state has no reference map or stratigraphy.
+    """
+    grid = grid_of(cfg)
+    if cfg.output.rendering == "elements":
+        vp, rho = state.vp_m_s, state.rho_kg_m3
+        col_step = None
+        if not on_grid(cfg):
+            cols = nearest_columns(cfg)
+            vp, rho, col_step = vp[:, cols], rho[:, cols], trace_spacing(cfg)
+        return ImagingInput(vp, rho, grid.cell_m, col_step, 1, vp, vp * rho)
+    if state.reference is None or state.strata is None:
+        raise InputError(f"[output] rendering = 'strata' needs the engine's reference map and "
+                         f"stratigraphy, and the state of snapshot {state.snapshot} has none")
+    n = substeps(cfg)
+    z = fine_depths(cfg, grid.nz)
+    X, D = np.meshgrid(trace_x(cfg), z)
+    x0, y0, unit = state.reference(X, D)
+    rock = np.isfinite(x0) & np.isfinite(y0)
+    vp = np.full(X.shape, np.nan)
+    rho = np.full(X.shape, np.nan)
+    vp[rock], rho[rock] = strata_properties(state.strata, x0[rock], y0[rock], unit[rock])
+    vp, rho = fill_gaps(vp), fill_gaps(rho)          # no rock: the nearest rock of the trace
+    change = float(params["fault_zone_impedance"])
+    if change != 0.0:
+        f = np.sqrt(damage_factor(np.repeat(maps["damage"], n, axis=0), change))
+        vp, rho = vp * f, rho * f
+    floor = property_model_of(cfg, dict(params)).vp_lower_bound_m_s
+    vp = np.maximum(vp, floor)
+    vp_cell = coarse_velocity(vp, n)
+    impedance = (vp * rho).reshape(grid.nz, n, -1).mean(axis=1)
+    return ImagingInput(vp, rho, grid.cell_m / n, trace_spacing(cfg), n, vp_cell, impedance)
 
 
 def _imaging_key(r: Render) -> tuple:

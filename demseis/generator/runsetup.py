@@ -18,9 +18,11 @@ from demseis.dem.basement import draw_fault_system
 from demseis.dem.fault import as_system
 from demseis.generator.config import Config
 from demseis.generator.layout import param_codes
-from demseis.generator.sampling import SEED_FAULTS, SEED_PROPERTIES, rng_at, seed_sequence
-from demseis.parameters import MATERIAL_FIELDS, MAX_BASEMENT_FAULTS, PROPERTY_FIELDS
-from demseis.seismic import LayerProperties, PropertyModel, draw_layer_properties
+from demseis.generator.sampling import (SEED_FAULTS, SEED_PROPERTIES, SEED_STRATA, rng_at,
+                                       seed_sequence)
+from demseis.parameters import BED_FIELDS, MATERIAL_FIELDS, MAX_BASEMENT_FAULTS, PROPERTY_FIELDS
+from demseis.seismic import (BedModel, LayerProperties, PropertyModel, Strata, draw_layer_properties,
+                             draw_strata)
 
 #: value of every ``fault<k>_*`` record of a fault a run does not have (the store holds no
 #: NaN); kind and direction codes index the ``fault_kind`` and ``dip_direction`` choices.
@@ -150,3 +152,22 @@ def run_properties(cfg: Config, run: int, model: PropertyModel,
     layer_props = draw_layer_properties(n_layers_total, model, rng_at(cfg, run, SEED_PROPERTIES))
     elem_seed = int(seed_sequence(cfg, run, SEED_PROPERTIES).generate_state(2, dtype=np.uint64)[1])
     return layer_props, elem_seed
+
+
+def bed_model_of(params: dict[str, Any]) -> BedModel:
+    """The bed model of a run (:class:`demseis.seismic.BedModel`) from its parameters."""
+    return BedModel(**{name: float(params[name]) for name in BED_FIELDS})
+
+
+def run_strata(cfg: Config, params: dict[str, Any], run: int, unit_bottom_m: np.ndarray,
+               unit_top_m: np.ndarray, props: LayerProperties,
+               n_prekinematic: int | None = None) -> Strata:
+    """The beds of run ``run`` (``strata`` rendering): its mechanical layers (and growth
+    layers, after the first ``n_prekinematic`` units) ``unit_bottom_m .. unit_top_m`` in
+    reference y, each split into beds around the layer's rock ``props``; drawn from the run's
+    ``SEED_STRATA`` node, so every snapshot and every engine state of the run gets the same
+    beds."""
+    return draw_strata(np.asarray(unit_bottom_m, dtype=np.float64),
+                       np.asarray(unit_top_m, dtype=np.float64), props, cfg.model.width_m,
+                       bed_model_of(params), rng_at(cfg, run, SEED_STRATA),
+                       n_prekinematic=n_prekinematic)

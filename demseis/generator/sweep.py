@@ -42,6 +42,7 @@ from demseis.generator.engines import get_engine
 from demseis.generator.layout import array_dtypes, grid_of, param_codes, param_dtypes, sample_shape
 from demseis.generator.pipeline import run_shard
 from demseis.generator.sampling import run_params
+from demseis.generator.survey import on_grid, trace_spacing
 from demseis.generator.workers import (
     set_worker_env,
     sigint_ignored,
@@ -109,7 +110,10 @@ def store_attrs(cfg: Config) -> dict[str, Any]:
     """Root attributes the driver writes when it creates a store."""
     grid = grid_of(cfg)
     grid_attrs: dict[str, Any] = {"x0_m": grid.x0_m, "top_m": grid.top_m, "cell_m": grid.cell_m,
-                                  "nz": grid.nz, "nx": grid.nx, "domain": cfg.output.domain}
+                                  "nz": grid.nz, "nx": sample_shape(cfg)[1],
+                                  "domain": cfg.output.domain}
+    if not on_grid(cfg):
+        grid_attrs["dx_m"] = trace_spacing(cfg)  # traces, not cells: x = x0 + (j + 0.5) dx
     if cfg.output.domain == "time":
         grid_attrs["dt_s"] = cfg.output.dt_s
         grid_attrs["nt"] = sample_shape(cfg)[0]

@@ -229,7 +229,8 @@ def depth_to_time(field: np.ndarray, vp_g: np.ndarray, cell_m: float, t_s: np.nd
 
 def synthetic_sections(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
                        freqs_hz: float | Sequence[float], domain: str = "depth", *,
-                       t_s: np.ndarray | None = None) -> np.ndarray:
+                       t_s: np.ndarray | None = None,
+                       col_step_m: float | None = None) -> np.ndarray:
     """Noise-free zero-phase Ricker sections of a property grid, one per frequency.
 
     Impedance ``Z = rho vp``, reflectivity ``(Z2 - Z1)/(Z2 + Z1)`` between vertically
@@ -246,6 +247,8 @@ def synthetic_sections(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
     domain : ``"depth"`` (default, pixel-aligned with the grid) or ``"time"``.
     t_s : (nt,) ascending TWT axis (s) for ``domain="time"`` (required there; build it once
         per sweep with :func:`time_axis` so all samples share a shape). Ignored for depth.
+    col_step_m : distance between columns; unused (columns are imaged independently), taken
+        so that every imaging mode accepts a grid whose rows are finer than its columns.
 
     Returns
     -------

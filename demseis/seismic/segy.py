@@ -30,8 +30,12 @@ from demseis.errors import InputError
 
 def write_segy(section: np.ndarray, out: str | Path, *, x0_m: float, cell_m: float,
                top_m: float, domain: str = "depth", dt_s: float | None = None,
-               overwrite: bool = False, note: str = "") -> Path:
+               overwrite: bool = False, note: str = "",
+               trace_spacing_m: float | None = None) -> Path:
     """Write a (ns, nx) float32 section to ``out`` (see the module docstring for the headers).
+
+    ``trace_spacing_m``: the distance between traces where it is not the cell (a store
+    sampled like a survey).
 
     The file is written next to ``out`` under a temporary name and renamed, so an existing file
     is never left half-written; it is replaced only with ``overwrite=True``.
@@ -62,13 +66,16 @@ def write_segy(section: np.ndarray, out: str | Path, *, x0_m: float, cell_m: flo
     spec.format = 5
     spec.samples = list(range(ns))
     spec.tracecount = nx
-    xs = x0_m + (np.arange(nx) + 0.5) * cell_m
+    dx = cell_m if trace_spacing_m is None else float(trace_spacing_m)
+    xs = x0_m + (np.arange(nx) + 0.5) * dx
     traces = np.ascontiguousarray(sec.T)
     tmp = out.with_name(out.name + ".tmp")
     lines = [
         "DEMSEIS SYNTHETIC SECTION (1-D CONVOLUTIONAL MODEL, ZERO-PHASE RICKER)",
         text_domain,
-        f"TRACES = GRID COLUMNS, X0 {x0_m:g} M, CELL {cell_m:g} M, GRID TOP ELEVATION {top_m:g} M",
+        (f"TRACES = GRID COLUMNS, X0 {x0_m:g} M, CELL {cell_m:g} M, GRID TOP ELEVATION {top_m:g} M"
+         if trace_spacing_m is None else
+         f"TRACES {dx:g} M APART, X0 {x0_m:g} M, CELL {cell_m:g} M, TOP ELEVATION {top_m:g} M"),
         "X IN CDP_X/SOURCEX/GROUPX (SCALAR -100)",
         "CDP = CROSSLINE = COLUMN + 1, INLINE = 1",
         note.upper()[:76],

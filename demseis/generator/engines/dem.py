@@ -10,10 +10,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from functools import partial
 from typing import Any
+
+import numpy as np
 
 from demseis.errors import ConfigError
 from demseis.dem import NormalFault, build_assembly, simulate, time_step
+from demseis.dem.reference import reference_map
 from demseis.dem.strata import layer_materials
 from demseis.generator.config import Config
 from demseis.generator.engines import EngineRun, State
@@ -21,10 +25,12 @@ from demseis.generator.layout import grid_of
 from demseis.generator.params import spec_values_hint
 from demseis.generator.physics import check_physics
 from demseis.generator.runsetup import (fault_system_of, layer_thicknesses, material_of,
-                                        property_model_of, run_info, run_properties)
+                                        property_model_of, run_info, run_properties, run_strata)
 from demseis.generator.sampling import SEED_DEM, SEED_LAYERS, SEED_PROPERTIES, RunSpec, rng_at
 from demseis.labels import displacement_history, label_maps, strain_history
-from demseis.seismic import draw_layer_properties, element_properties, property_grids
+from demseis.seismic import (LayerProperties, Strata, draw_layer_properties, element_properties,
+                             property_grids)
+from demseis.types import Snapshot
 
 #: ``--dry-run`` cost model, fitted to the seed-scale run measured by benchmarks/dem_seed.py
 #: (11,224 elements: 25.8 s faulting for ~45,900 steps, 15.7 s settling, one core)
@@ -124,6 +130,9 @@ class DemEngine:
         history = strain_history(snaps, cfg.labels)
         disp = displacement_history(snaps) if cfg.labels.method == "slip_trace" \
             else [None] * len(snaps)
+        strata = None
+        if cfg.output.rendering == "strata":
+            strata = dem_strata(cfg, run, snaps, layer_props)
         for k in snapshots:
             snap = snaps[k]
             vp_e, rho_e = element_properties(snap.ids, snap.layer, layer_props, model, elem_seed)
@@ -131,7 +140,50 @@ class DemEngine:
             labels = label_maps(snap, history[k], grid, cfg.labels, displacement=disp[k])
             values = {"step": snap.step, "throw_m": snap.throw_m, "n_elements": snap.n,
                       **run.info.throws_at(k, len(snaps))}
-            yield State(snapshot=k, vp_m_s=vp_g, rho_kg_m3=rho_g, labels=labels, values=values)
+            reference = None if strata is None else partial(_reference, snaps, k, grid.top_m)
+            yield State(snapshot=k, vp_m_s=vp_g, rho_kg_m3=rho_g, labels=labels, values=values,
+                        reference=reference, strata=strata)
+
+
+def dem_strata(cfg: Config, run: EngineRun, snaps: Sequence[Snapshot],
+               props: LayerProperties) -> Strata:
+    """The beds of a DEM run: its pre-kinematic layers (the thicknesses the assembly was
+    built with), then each growth layer over the reference y its elements were deposited at."""
+    p = run.spec.params
+    n = int(p["n_layers"])
+    H = cfg.model.height_m
+    thick = layer_thicknesses(cfg, n, float(p["layer_thickness_cv"]),
+                              rng_at(cfg, run.spec.run, SEED_LAYERS))
+    thick = np.full(n, H / n) if thick is None else thick
+    top = np.cumsum(thick)
+    top[-1] = H
+    bottom = np.concatenate([[0.0], top[:-1]])
+    n_total = int(props.vp.size)
+    lo = np.full(n_total - n, np.inf)
+    hi = np.full(n_total - n, -np.inf)
+    for s, (d, _) in zip(snaps, displacement_history(snaps)):
+        grown = s.deposited & (s.layer >= n)
+        if not grown.any():
+            continue
+        g = s.layer[grown].astype(np.int64) - n
+        y = s.xy[grown, 1] - d[grown, 1]
+        np.minimum.at(lo, g, y - s.radius[grown])
+        np.maximum.at(hi, g, y + s.radius[grown])
+    empty = ~np.isfinite(lo)
+    lo[empty], hi[empty] = H, H + 1.0   # a growth layer no element of which survived
+    return run_strata(cfg, p, run.spec.run, np.concatenate([bottom, lo]),
+                      np.concatenate([top, hi]), props, n_prekinematic=n)
+
+
+def _reference(snaps: Sequence[Snapshot], k: int, top_m: float, x_m: np.ndarray,
+               depth_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:attr:`State.reference` of snapshot ``k``: :func:`demseis.dem.reference_map`; a point
+    in a growth element is looked up in that element's growth unit."""
+    x = np.asarray(x_m, dtype=np.float64)
+    pts = np.stack([x.ravel(), top_m - np.asarray(depth_m, dtype=np.float64).ravel()], axis=1)
+    ref = reference_map(snaps, k, pts)
+    unit = np.where(ref.deposited, ref.layer.astype(np.int64), -1).reshape(x.shape)
+    return ref.ref_xy[:, 0].reshape(x.shape), ref.ref_xy[:, 1].reshape(x.shape), unit
 
 
 ENGINE = DemEngine()

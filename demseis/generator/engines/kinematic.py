@@ -34,6 +34,7 @@ There are no particles: the store's ``particles/`` group stays empty.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -42,10 +43,10 @@ from scipy.ndimage import gaussian_filter
 from demseis.generator.config import Config
 from demseis.generator.engines import EngineRun, State
 from demseis.generator.layout import grid_of
-from demseis.generator.runsetup import RunInfo, property_model_of, run_info
+from demseis.generator.runsetup import RunInfo, property_model_of, run_info, run_strata
 from demseis.generator.sampling import SEED_DEM, SEED_LAYERS, SEED_PROPERTIES, RunSpec, rng_at
 from demseis.schema import engine_labels, sample_array
-from demseis.seismic import draw_layer_properties
+from demseis.seismic import LayerProperties, Strata, draw_layer_properties
 
 #: the layer stack covers depths [-ABOVE, 1 + BELOW] x height (uplift, subsidence and folds)
 ABOVE, BELOW = 1.0, 1.0
@@ -101,31 +102,25 @@ def layer_tops(n_layers: int, cv: float, height_m: float, rng: np.random.Generat
     return -ABOVE * height_m + np.concatenate([[0.0], np.cumsum(h)])
 
 
-def kinematic_state(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo,
-                    fraction: float) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """Layer index and label maps of run ``run`` with ``fraction`` of every throw.
+def unfault(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo, fraction: float,
+            x_m: np.ndarray, depth_m: np.ndarray,
+            maps: dict[str, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Where the rock at points ``(x_m, depth_m)`` (depth below the grid top) was before it was
+    faulted and folded, with ``fraction`` of every throw.
 
-    Returns
-    -------
-    layer : (nz, nx) int64 index into the run's layer stack (0 = deepest).
-    maps : the label maps of :mod:`demseis.labels` (``layer`` included).
+    Returns ``(x0_m, depth0_m)``: the x and the unfolded depth in the layer stack (the depth
+    of the point's layering before folding). With ``maps`` (the label maps of the grid, with
+    ``x_m, depth_m`` the grid's cell centres), each fault's labels are drawn into them on the way.
     """
     grid = grid_of(cfg)
     H, W = cfg.model.height_m, cfg.model.width_m
-    cell = grid.cell_m
-    half_m = 0.5 * max(float(cfg.labels.thickness_cells), 1.0) * cell
-    zc = (np.arange(grid.nz) + 0.5) * cell  # depth of the cell centres (row 0 at the top)
-    xc = (np.arange(grid.nx) + 0.5) * cell
-    X, D = np.meshgrid(xc, zc)
-    shape = X.shape
-    maps = {name: np.zeros(shape, sample_array(name).dtype) for name in engine_labels()}
-    fault, damage, fid = maps["fault"], maps["damage"], maps["fault_id"]
-    slip, dip_map, sense = maps["slip_m"], maps["dip_deg"], maps["sense"]
+    X, D = np.asarray(x_m, dtype=np.float64), np.asarray(depth_m, dtype=np.float64)
+    half_m = 0.5 * max(float(cfg.labels.thickness_cells), 1.0) * grid.cell_m
     rng = rng_at(cfg, run, SEED_DEM)
     faults = info.system.faults
     centres = rng.uniform(0.35, 0.65, len(faults)) * H  # drawn whatever the fraction
-    fold = fold_field(np.linspace(-W, 2 * W, 3 * grid.nx + 1), W,
-                      float(params["fold_amplitude_m"]), str(params["fold_kind"]), rng)
+    fold_x = np.linspace(-W, 2 * W, 3 * grid.nx + 1)
+    fold = fold_field(fold_x, W, float(params["fold_amplitude_m"]), str(params["fold_kind"]), rng)
     axis = np.linspace(-(ABOVE + 1.0) * H, (2.0 + BELOW) * H, 8 * grid.nz + 1)
     taper = float(params["throw_taper"])
     # youngest fault first: map present cells back to where their rock was before it slipped
@@ -139,24 +134,50 @@ def kinematic_state(cfg: Config, params: Mapping[str, Any], run: int, info: RunI
         u = (D - centres[k]) / (HALF_LENGTH_FRAC * H)
         throw = fraction * f.throw_m * np.clip(1.0 - taper * u**2, 0.0, None)
         hanging = (X - x_here) * s > 0
-        perp = np.abs(X - x_here) * np.sin(np.radians(dip_here))
-        active = throw > 0
-        # labels of this fault, in present coordinates (cells not yet claimed by a younger one)
-        free = fid == 0
-        on = active & (perp <= half_m) & free
-        fault[on] = 1
-        damage[active & (perp <= 3 * half_m) & (damage == 0)] = 1
-        damage[on] = 2
-        fid[on] = k + 1
-        slip[on] = (throw / np.sin(np.radians(dip_here)))[on]
-        dip_map[on] = dip_here[on]
-        sense[on] = 2 if f.kind == "reverse" else 1
+        if maps is not None:
+            _draw_fault(maps, k, f.kind, np.abs(X - x_here) * np.sin(np.radians(dip_here)),
+                        throw, dip_here, half_m)
         # hanging wall: normal/listric moved down-dip, reverse up-dip; undo it
         sign = -1.0 if f.kind == "reverse" else 1.0
         heave = throw / np.tan(np.radians(dip_here))
         D = np.where(hanging, D - sign * throw, D)
         X = np.where(hanging, X - sign * s * heave, X)
-    depth0 = D - np.interp(X, np.linspace(-W, 2 * W, 3 * grid.nx + 1), fold)
+    return X, D - np.interp(X, fold_x, fold)
+
+
+def _draw_fault(maps: dict[str, np.ndarray], k: int, kind: str, perp: np.ndarray,
+                throw: np.ndarray, dip: np.ndarray, half_m: float) -> None:
+    """Labels of fault ``k`` (perpendicular distance ``perp`` of every cell, its local throw
+    and dip), in present coordinates, on the cells not yet claimed by a younger fault."""
+    fault, damage, fid = maps["fault"], maps["damage"], maps["fault_id"]
+    active = throw > 0
+    on = active & (perp <= half_m) & (fid == 0)
+    fault[on] = 1
+    damage[active & (perp <= 3 * half_m) & (damage == 0)] = 1
+    damage[on] = 2
+    fid[on] = k + 1
+    maps["slip_m"][on] = (throw / np.sin(np.radians(dip)))[on]
+    maps["dip_deg"][on] = dip[on]
+    maps["sense"][on] = 2 if kind == "reverse" else 1
+
+
+def kinematic_state(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo,
+                    fraction: float) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Layer index and label maps of run ``run`` with ``fraction`` of every throw.
+
+    Returns
+    -------
+    layer : (nz, nx) int64 index into the run's layer stack (0 = deepest).
+    maps : the label maps of :mod:`demseis.labels` (``layer`` included).
+    """
+    grid = grid_of(cfg)
+    H = cfg.model.height_m
+    cell = grid.cell_m
+    zc = (np.arange(grid.nz) + 0.5) * cell  # depth of the cell centres (row 0 at the top)
+    xc = (np.arange(grid.nx) + 0.5) * cell
+    X, D = np.meshgrid(xc, zc)
+    maps = {name: np.zeros(X.shape, sample_array(name).dtype) for name in engine_labels()}
+    _, depth0 = unfault(cfg, params, run, info, fraction, X, D, maps)
     tops = layer_tops(int(params["n_layers"]), float(params["layer_thickness_cv"]), H,
                       rng_at(cfg, run, SEED_LAYERS))
     n_total = tops.size - 1
@@ -165,6 +186,16 @@ def kinematic_state(cfg: Config, params: Mapping[str, Any], run: int, info: RunI
     layer = (n_total - 1 - from_top).astype(np.int64)
     maps["layer"] = layer.astype(maps["layer"].dtype)  # strain stays 0: no strain field
     return layer, maps
+
+
+def kinematic_strata(cfg: Config, params: Mapping[str, Any], run: int,
+                     props: LayerProperties) -> Strata:
+    """The beds of run ``run``: its layer stack (``layer_tops``) as the units, in y."""
+    H = cfg.model.height_m
+    tops = layer_tops(int(params["n_layers"]), float(params["layer_thickness_cv"]), H,
+                      rng_at(cfg, run, SEED_LAYERS))
+    y = H - tops[::-1]                                # unit boundaries in y, bottom first
+    return run_strata(cfg, params, run, y[:-1], y[1:], props)
 
 
 class KinematicEngine:
@@ -197,7 +228,7 @@ class KinematicEngine:
         p = run.spec.params
         model = property_model_of(cfg, p)
         n_snap = cfg.model.n_snapshots
-        props = None
+        props = strata = None
         for k in snapshots:
             fraction = k / (n_snap - 1)
             layer, maps = kinematic_state(cfg, p, run.spec.run, run.info, fraction)
@@ -211,7 +242,21 @@ class KinematicEngine:
                 vp_g, rho_g = gaussian_filter(vp_g, sigma), gaussian_filter(rho_g, sigma)
             values = {"step": k, "throw_m": fraction * run.info.master.throw_m, "n_elements": 0,
                       **run.info.throws_at(k, n_snap)}
-            yield State(snapshot=k, vp_m_s=vp_g, rho_kg_m3=rho_g, labels=maps, values=values)
+            reference = None
+            if cfg.output.rendering == "strata":
+                if strata is None:
+                    strata = kinematic_strata(cfg, p, run.spec.run, props)
+                reference = partial(_reference, cfg, p, run.spec.run, run.info, fraction)
+            yield State(snapshot=k, vp_m_s=vp_g, rho_kg_m3=rho_g, labels=maps, values=values,
+                        reference=reference, strata=strata)
+
+
+def _reference(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo, fraction: float,
+               x_m: np.ndarray, depth_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:attr:`State.reference` of the kinematic engine: :func:`unfault`, every point in the
+    pre-kinematic stack."""
+    x0, depth0 = unfault(cfg, params, run, info, fraction, x_m, depth_m)
+    return x0, cfg.model.height_m - depth0, np.full(np.shape(x0), -1, dtype=np.int64)
 
 
 ENGINE = KinematicEngine()

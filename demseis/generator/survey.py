@@ -1,0 +1,185 @@
+"""Survey sampling and the ``strata`` rendering: what a section looks like where it is sampled
+like a survey.
+
+Traces
+------
+A sweep's output columns are traces ``trace_spacing_m`` apart (``[output]``; 0 = the grid
+cell), ``x_j = (j + 0.5) dx`` for every trace that fits the model's width, independent of the
+model's raster grid and its elements. Rows are the grid's depth cells (``domain = "depth"``) or
+a two-way-time axis of ``dt_s`` samples (``domain = "time"``), so faults draw at their apparent
+dip: a time section is vertically exaggerated.
+
+Labels are made on the grid (:mod:`demseis.labels`, the engines) and taken to the traces by
+:func:`labels_at_traces`: each trace takes, row by row, the grid cell of its footprint
+``[x_j - dx/2, x_j + dx/2)`` that holds a fault (then a fault core, then a damage zone; then
+the cell nearest the trace), so a one-cell fault line stays one connected line at any
+spacing, and every label array of a pixel comes from the same cell.
+
+The ``strata`` rendering
+------------------------
+``rendering = "elements"`` images the engine's property grids (per-element properties,
+rasterised: the paper's mode). ``rendering = "strata"`` images a fine stratigraphy instead:
+
+1. the engine maps every point of a trace, at a vertical step of at most ``strata_dz_m``
+   (an odd number of steps per grid cell, so the cell centres are points), back to its
+   reference coordinates (:attr:`demseis.generator.engines.State.reference`: where the rock
+   there was before it moved, or where it was deposited);
+2. the run's beds (:mod:`demseis.seismic.strata`, drawn once per run around the properties
+   of its mechanical layers) give Vp and density there;
+3. the fault zones change the impedance by ``fault_zone_impedance`` times the damage label
+   over 2 (the core 1, the damage zone 1/2), split evenly between Vp and density;
+4. the fine columns are imaged like any property grid (one reflection per fine interface at
+   its exact two-way time), the rows of the cell centres kept in depth.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from demseis.generator.config import Config
+from demseis.seismic import depth_to_time
+
+#: priority of a label pixel when a trace's footprint holds several grid cells
+_FAULT_PRIORITY = 4
+
+
+def trace_spacing(cfg: Config) -> float:
+    """The distance between output traces (m): ``[output] trace_spacing_m``, or the cell."""
+    dx = float(cfg.output.trace_spacing_m)
+    return dx if dx > 0 else float(cfg.grid.cell_m)
+
+
+def on_grid(cfg: Config) -> bool:
+    """Whether the traces are the grid's columns (no lateral resampling)."""
+    return float(cfg.output.trace_spacing_m) in (0.0, float(cfg.grid.cell_m))
+
+
+def trace_x(cfg: Config) -> np.ndarray:
+    """(ntr,) x (m) of the traces: ``(j + 0.5) dx`` for every trace inside the model width."""
+    dx = trace_spacing(cfg)
+    n = max(1, int(math.floor(cfg.model.width_m / dx + 1e-9)))
+    return (np.arange(n) + 0.5) * dx
+
+
+def footprint_columns(cfg: Config) -> list[np.ndarray]:
+    """Per trace, the grid columns whose centres lie in its footprint (the nearest column when
+    none does: traces closer than the cells)."""
+    cell = float(cfg.grid.cell_m)
+    nx = max(1, int(math.floor(cfg.model.width_m / cell + 1e-9)))
+    dx = trace_spacing(cfg)
+    centres = (np.arange(nx) + 0.5) * cell
+    out = []
+    for x in trace_x(cfg):
+        cols = np.flatnonzero((centres >= x - 0.5 * dx) & (centres < x + 0.5 * dx))
+        if cols.size == 0:
+            cols = np.array([min(nx - 1, int(x // cell))])
+        out.append(cols)
+    return out
+
+
+def nearest_columns(cfg: Config) -> np.ndarray:
+    """(ntr,) the grid column under each trace."""
+    cell = float(cfg.grid.cell_m)
+    nx = max(1, int(math.floor(cfg.model.width_m / cell + 1e-9)))
+    return np.minimum(nx - 1, (trace_x(cfg) // cell).astype(np.int64))
+
+
+def labels_at_traces(cfg: Config, maps: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The (nz, nx) grid label maps taken to the (nz, ntr) traces (module docstring).
+
+    Every map must have the grid's shape; ``fault`` and ``damage`` set the priority.
+    """
+    if on_grid(cfg):
+        return dict(maps)
+    fault = np.asarray(maps["fault"])
+    damage = np.asarray(maps["damage"])
+    nz = fault.shape[0]
+    cols = footprint_columns(cfg)
+    xs = trace_x(cfg)
+    cell = float(cfg.grid.cell_m)
+    pick = np.empty((nz, len(cols)), dtype=np.int64)
+    for j, c in enumerate(cols):
+        # higher label priority first; among equals the cell nearest the trace
+        near = np.abs((c + 0.5) * cell - xs[j])
+        rank = np.argsort(np.argsort(near, kind="stable"), kind="stable")
+        score = ((fault[:, c] > 0) * _FAULT_PRIORITY + damage[:, c].astype(np.int64)) \
+            * (c.size + 1) - rank[None, :]
+        pick[:, j] = c[np.argmax(score, axis=1)]
+    rows = np.arange(nz)[:, None]
+    return {name: np.asarray(m)[rows, pick] for name, m in maps.items()}
+
+
+def substeps(cfg: Config) -> int:
+    """Odd number of strata steps per grid cell, each at most ``strata_dz_m``."""
+    n = int(math.ceil(float(cfg.grid.cell_m) / float(cfg.output.strata_dz_m) - 1e-9))
+    return n if n % 2 == 1 else n + 1
+
+
+def fine_depths(cfg: Config, nz: int) -> np.ndarray:
+    """(nz * substeps,) depths (m below the grid top) of the strata points of a trace."""
+    n = substeps(cfg)
+    dz = float(cfg.grid.cell_m) / n
+    return (np.arange(nz * n) + 0.5) * dz
+
+
+def fill_gaps(values: np.ndarray) -> np.ndarray:
+    """``values`` (rows, cols) with NaN (no rock) filled.
+
+    Above the first rock of a column (the space above the surface of a subsided hanging
+    wall, say) every column takes one value, the median of the columns' first rock values, so
+    that the two-way time through that space does not jump from trace to trace; gaps within
+    or below the rock take the nearest value of the column (below first). An empty column
+    takes the same single value.
+    """
+    v = np.array(values, dtype=np.float64)
+    bad = ~np.isfinite(v)
+    if not bad.any():
+        return v
+    has = (~bad).any(axis=0)
+    first = np.argmax(~bad, axis=0)
+    surface = v[first[has], np.flatnonzero(has)]
+    above_value = float(np.median(surface)) if surface.size else 1.0
+    rows = np.arange(v.shape[0])
+    for j in np.flatnonzero(bad.any(axis=0)):
+        ok = ~bad[:, j]
+        if not ok.any():
+            v[:, j] = above_value
+            continue
+        good = rows[ok]
+        v[:good[0], j] = above_value
+        below = np.searchsorted(good, rows)           # first good row at or below
+        above = np.clip(below - 1, 0, good.size - 1)
+        below = np.clip(below, 0, good.size - 1)
+        take = np.where(np.abs(good[below] - rows) <= np.abs(rows - good[above]),
+                        good[below], good[above])
+        inner = bad[:, j] & (rows > good[0])
+        v[inner, j] = v[take[inner], j]
+    return v
+
+
+def coarse_velocity(vp_fine: np.ndarray, n: int) -> np.ndarray:
+    """(nz, ntr) interval velocity of each grid cell from its ``n`` fine steps (harmonic
+    mean: the cell's two-way time is the sum of its steps')."""
+    nzf, ntr = vp_fine.shape
+    slow = (1.0 / vp_fine).reshape(nzf // n, n, ntr).mean(axis=1)
+    return 1.0 / slow
+
+
+def damage_factor(damage: np.ndarray, change: float) -> np.ndarray:
+    """Impedance factor ``1 + change * damage / 2`` of each point (damage 0, 1 or 2)."""
+    return 1.0 + float(change) * np.asarray(damage, dtype=np.float64) / 2.0
+
+
+def cell_rows(fine: np.ndarray, n: int) -> np.ndarray:
+    """The fine rows at the grid cells' centres (``n`` odd steps per cell)."""
+    return fine[..., n // 2::n, :]
+
+
+def to_time(maps: Mapping[str, np.ndarray], vp: np.ndarray, cell_m: float, t_s: np.ndarray,
+            fills: Mapping[str, object]) -> dict[str, np.ndarray]:
+    """Per-cell maps on the time axis ``t_s`` (nearest: each sample takes its cell's value)."""
+    return {name: depth_to_time(m, vp, cell_m, t_s, method="nearest", fill=fills[name])
+            for name, m in maps.items()}

@@ -1,0 +1,87 @@
+"""docs/figures/survey_f3.png: the F3 field section beside demseis sections sampled like it.
+
+The stores are those `benchmarks/survey_realism.py --out DIR` writes (4 ms, 25 m traces,
+noise-free); the figure shows F3, then one sample of each engine's `elements` and `strata`
+stores, at the same sampling and pixel aspect (one pixel per sample and per trace).
+
+    PYTHONPATH=$PWD python scripts/survey_figure.py DIR [--sample 3] [--freq 40]
+        [--field ../shared/field/f3_inline.sgy] [--out docs/figures/survey_f3.png]
+
+The figure contains the F3 section: "F3 Netherlands data courtesy of dGB Earth Sciences,
+CC BY-SA 3.0"; the figure is itself CC BY-SA 3.0.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from demseis.datasets import open_store, read_sample  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+FIELD = ROOT.parent / "shared" / "field" / "f3_inline.sgy"
+ATTRIBUTION = ("F3 Netherlands data courtesy of dGB Earth Sciences, CC BY-SA 3.0; "
+               "this figure is CC BY-SA 3.0")
+
+
+def read_field(path: Path) -> np.ndarray:
+    import segyio  # lazy: only this figure reads SEG-Y
+
+    with segyio.open(str(path), ignore_geometry=True) as f:
+        return np.stack([np.asarray(t, dtype=np.float64) for t in f.trace]).T
+
+
+def pick(store: Path, sample: int, freq: float) -> tuple[np.ndarray, np.ndarray, int]:
+    """The first sample at or after ``sample`` rendered at ``freq`` Hz, with its fault label."""
+    root = open_store(store)
+    freqs = np.asarray(root["params"]["freq_hz"][:])
+    snaps = np.asarray(root["params"]["snapshot"][:])
+    order = [i for i in range(freqs.size) if i >= sample and abs(freqs[i] - freq) < 1e-6
+             and snaps[i] == snaps.max()]
+    i = order[0] if order else sample
+    s = read_sample(store, i, ("seismic", "fault"))
+    return s.arrays["seismic"], s.arrays["fault"], i
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("stores", type=Path)
+    ap.add_argument("--sample", type=int, default=0)
+    ap.add_argument("--freq", type=float, default=40.0)
+    ap.add_argument("--field", type=Path, default=FIELD)
+    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "figures" / "survey_f3.png")
+    args = ap.parse_args()
+    panels = [("F3 inline (field, 4 ms, 25 m traces)", read_field(args.field), None)]
+    for engine in ("dem", "kinematic"):
+        for rendering in ("elements", "strata"):
+            store = args.stores / f"{engine}_{rendering}.zarr"
+            if store.exists():
+                sec, fault, i = pick(store, args.sample, args.freq)
+                panels.append((f"{engine}, {rendering} (sample {i}, {args.freq:g} Hz)", sec, fault))
+    n = len(panels)
+    fig, axes = plt.subplots(n, 1, figsize=(9, 2.6 * n), layout="constrained")
+    for ax, (title, sec, fault) in zip(np.atleast_1d(axes), panels):
+        live = sec[np.any(sec != 0, axis=1)] if np.any(sec) else sec
+        clip = float(np.percentile(np.abs(live), 98)) or 1.0
+        ax.imshow(sec, cmap="gray", vmin=-clip, vmax=clip, aspect=1.0, interpolation="nearest")
+        if fault is not None:
+            ax.contour(fault > 0, levels=[0.5], colors="red", linewidths=0.4, alpha=0.5)
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel("trace")
+        ax.set_ylabel("sample (4 ms)")
+    fig.suptitle("A survey's section and demseis's at the same sampling (1 pixel = 4 ms x 25 m)",
+                 fontsize=10)
+    fig.text(0.5, -0.01, ATTRIBUTION, ha="center", fontsize=7)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(args.out, dpi=110, bbox_inches="tight")
+    print(args.out)
+
+
+if __name__ == "__main__":
+    main()

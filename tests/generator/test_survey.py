@@ -1,0 +1,90 @@
+"""Survey sampling: traces, labels at the traces, the strata points of a trace."""
+
+from __future__ import annotations
+
+import numpy as np
+from demseis.generator.config import parse_config
+from demseis.generator.layout import sample_shape
+from demseis.generator.survey import (cell_rows, coarse_velocity, damage_factor, fill_gaps,
+                                      fine_depths, labels_at_traces, on_grid, substeps,
+                                      trace_spacing, trace_x)
+from demseis.seismic import interface_times
+
+
+def _cfg(**output):
+    return parse_config({"model": {"width_m": 1000.0, "height_m": 400.0},
+                         "sweep": {"throw_m": 100.0, "n_layers": 8}, "output": output})
+
+
+def test_traces_default_to_the_grid_columns():
+    cfg = _cfg()
+    assert on_grid(cfg) and trace_spacing(cfg) == 10.0
+    np.testing.assert_allclose(trace_x(cfg), (np.arange(100) + 0.5) * 10.0)
+    maps = {"fault": np.zeros((40, 100), np.uint8), "damage": np.zeros((40, 100), np.uint8)}
+    assert labels_at_traces(cfg, maps)["fault"] is maps["fault"]
+
+
+def test_trace_spacing_sets_the_sample_width():
+    cfg = _cfg(trace_spacing_m=25.0)
+    assert not on_grid(cfg)
+    assert trace_x(cfg).size == 40 and sample_shape(cfg) == (40, 40)
+    np.testing.assert_allclose(trace_x(cfg)[:2], [12.5, 37.5])
+
+
+def test_a_one_cell_fault_line_stays_connected_at_any_spacing():
+    """A 60-degree line one cell wide on the grid: every row keeps exactly one fault trace
+    at 25 m spacing, and its other label arrays come from the same cell."""
+    cfg = _cfg(trace_spacing_m=25.0)
+    nz, nx = 40, 100
+    fault = np.zeros((nz, nx), np.uint8)
+    fid = np.zeros((nz, nx), np.int16)
+    slip = np.zeros((nz, nx), np.float32)
+    for i in range(nz):
+        j = 20 + int(round(i / np.tan(np.radians(60.0))))
+        fault[i, j] = 1
+        fid[i, j] = 3
+        slip[i, j] = 7.0 + i
+    damage = np.where(fault > 0, 2, 0).astype(np.uint8)
+    out = labels_at_traces(cfg, {"fault": fault, "damage": damage, "fault_id": fid,
+                                 "slip_m": slip})
+    assert out["fault"].shape == (nz, 40)
+    assert (out["fault"].sum(axis=1) == 1).all()
+    cols = np.argmax(out["fault"], axis=1)
+    assert np.abs(np.diff(cols)).max() <= 1                # connected, one trace per row
+    assert (out["fault_id"][out["fault"] > 0] == 3).all()
+    np.testing.assert_array_equal(out["slip_m"][np.arange(nz), cols], 7.0 + np.arange(nz))
+
+
+def test_substeps_are_odd_and_cell_centres_are_strata_points():
+    cfg = _cfg(strata_dz_m=1.0)
+    n = substeps(cfg)
+    assert n == 11 and n % 2 == 1 and 10.0 / n <= 1.0
+    z = fine_depths(cfg, 40)
+    assert z.size == 440
+    np.testing.assert_allclose(cell_rows(z[:, None], n)[:, 0], (np.arange(40) + 0.5) * 10.0)
+    assert substeps(_cfg(strata_dz_m=0.5)) == 21
+
+
+def test_coarse_velocity_keeps_the_two_way_time_of_every_cell_bottom():
+    rng = np.random.default_rng(0)
+    n = 11
+    vp = rng.uniform(2000, 4000, (40 * n, 3))
+    coarse = coarse_velocity(vp, n)
+    fine_t, _ = interface_times(vp, 10.0 / n)
+    coarse_t, _ = interface_times(coarse, 10.0)
+    np.testing.assert_allclose(coarse_t, fine_t[n - 1::n], rtol=1e-12)
+
+
+def test_fill_gaps_takes_one_value_above_the_rock_and_the_nearest_rock_below():
+    v = np.array([[np.nan, 1.0], [2.0, np.nan], [np.nan, np.nan], [np.nan, 3.0],
+                  [5.0, np.nan]])
+    out = fill_gaps(v)
+    # above the rock: the median of the columns' first rock values (2 and 1)
+    np.testing.assert_array_equal(out[:, 0], [1.5, 2.0, 2.0, 5.0, 5.0])
+    np.testing.assert_array_equal(out[:, 1], [1.0, 1.0, 3.0, 3.0, 3.0])
+    allnan = fill_gaps(np.array([[np.nan, 4.0], [np.nan, 4.0]]))
+    np.testing.assert_array_equal(allnan[:, 0], [4.0, 4.0])
+
+
+def test_damage_factor():
+    np.testing.assert_allclose(damage_factor(np.array([0, 1, 2]), -0.2), [1.0, 0.9, 0.8])
