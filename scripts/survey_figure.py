@@ -63,18 +63,31 @@ def main() -> None:
             store = args.stores / f"{engine}_{rendering}.zarr"
             if store.exists():
                 sec, fault, i = pick(store, args.sample, args.freq)
-                panels.append((f"{engine}, {rendering} (sample {i}, {args.freq:g} Hz)", sec, fault))
-    n = len(panels)
-    fig, axes = plt.subplots(n, 1, figsize=(9, 2.6 * n), layout="constrained")
-    for ax, (title, sec, fault) in zip(np.atleast_1d(axes), panels):
+                panels.append((f"{engine}, {rendering}\n(sample {i}, {args.freq:g} Hz)", sec,
+                               fault))
+    # one pixel per sample and per trace in every panel: F3 across the top, the demseis
+    # sections side by side below (rows below the deepest live sample cropped)
+    syn = panels[1:]
+    rows = max([int(np.flatnonzero(np.any(sec != 0, axis=1))[-1]) + 1 for _, sec, _ in syn]
+               or [1])
+    widths = [sec.shape[1] for _, sec, _ in syn]
+    field_w = panels[0][1].shape[1]
+    widths_all = widths + ([field_w - sum(widths)] if field_w > sum(widths) else [])
+    fig = plt.figure(figsize=(max(field_w, sum(widths)) / 45, (panels[0][1].shape[0] + rows) / 45
+                              + 1.2), layout="constrained")
+    gs = fig.add_gridspec(2, len(widths_all), width_ratios=widths_all,
+                          height_ratios=[panels[0][1].shape[0], rows])
+    axes = [fig.add_subplot(gs[0, :])] + [fig.add_subplot(gs[1, k]) for k in range(len(syn))]
+    for ax, (title, sec, fault) in zip(axes, panels):
+        sec = sec if fault is None else sec[:rows]
         live = sec[np.any(sec != 0, axis=1)] if np.any(sec) else sec
         clip = float(np.percentile(np.abs(live), 98)) or 1.0
         ax.imshow(sec, cmap="gray", vmin=-clip, vmax=clip, aspect=1.0, interpolation="nearest")
         if fault is not None:
-            ax.contour(fault > 0, levels=[0.5], colors="red", linewidths=0.4, alpha=0.5)
-        ax.set_title(title, fontsize=9)
-        ax.set_xlabel("trace")
-        ax.set_ylabel("sample (4 ms)")
+            ax.contour(fault[:rows] > 0, levels=[0.5], colors="red", linewidths=0.4, alpha=0.6)
+        ax.set_title(title, fontsize=7)
+        ax.tick_params(labelsize=6)
+    axes[0].set_ylabel("sample (4 ms)", fontsize=7)
     fig.suptitle("A survey's section and demseis's at the same sampling (1 pixel = 4 ms x 25 m)",
                  fontsize=10)
     fig.text(0.5, -0.01, ATTRIBUTION, ha="center", fontsize=7)

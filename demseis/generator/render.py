@@ -22,7 +22,7 @@ from demseis.generator.layout import (array_dtypes, grid_of, param_codes, param_
                                       sample_shape, time_axis_of)
 from demseis.generator.runsetup import property_model_of
 from demseis.generator.sampling import Render, RunSpec
-from demseis.generator.survey import (cell_rows, coarse_velocity, damage_factor, fill_gaps,
+from demseis.generator.survey import (coarse_velocity, reference_points, damage_factor, fill_gaps,
                                       fine_depths, labels_at_traces, nearest_columns, on_grid,
                                       substeps, to_time, trace_spacing, trace_x)
 from demseis.labels import sample_facts
@@ -108,9 +108,9 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
     for key, (first, fset) in wanted.items():
         freqs = sorted(fset)
         secs = imaged_sections(first.imaging, img.vp, img.rho, img.dz_m, freqs, domain,
-                               t_s=t_s, col_step_m=img.col_step_m, **first.values)
-        if domain == "depth" and img.substeps > 1:
-            secs = cell_rows(secs, img.substeps)
+                               t_s=t_s, col_step_m=img.col_step_m,
+                               rows_per_cell=img.substeps if domain == "depth" else 1,
+                               **first.values)
         images.update({(key, f): sec for f, sec in zip(freqs, secs)})
     impedance = img.impedance
     if t_s is not None:
@@ -184,7 +184,7 @@ def imaging_input(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
     n = substeps(cfg)
     z = fine_depths(cfg, grid.nz)
     X, D = np.meshgrid(trace_x(cfg), z)
-    x0, y0, unit = state.reference(X, D)
+    x0, y0, unit = reference_points(state.reference, trace_x(cfg), z)
     rock = np.isfinite(x0) & np.isfinite(y0)
     vp = np.full(X.shape, np.nan)
     rho = np.full(X.shape, np.nan)

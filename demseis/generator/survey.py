@@ -35,7 +35,7 @@ rasterised: the paper's mode). ``rendering = "strata"`` images a fine stratigrap
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
@@ -112,6 +112,47 @@ def labels_at_traces(cfg: Config, maps: Mapping[str, np.ndarray]) -> dict[str, n
     return {name: np.asarray(m)[rows, pick] for name, m in maps.items()}
 
 
+#: the reference map is evaluated every REFERENCE_STEP strata points down a trace and
+#: interpolated in between (module docstring)
+REFERENCE_STEP = 3
+#: a jump of the reference y between two evaluated points larger than this (m) beyond their
+#: depth difference is a slip surface: the points between take the nearer one's map
+JUMP_M = 0.25
+
+
+def reference_points(reference: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, ...]],
+                     x_m: np.ndarray, depth_m: np.ndarray,
+                     step: int = REFERENCE_STEP) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``reference(X, D)`` on the grid of traces ``x_m`` by strata depths ``depth_m`` (rows),
+    evaluated every ``step`` rows (and the last) and interpolated linearly in between.
+
+    Inside rock that moved together the map is smooth at the scale of a few metres, so the
+    interpolation is exact to far below a bed; where the evaluated neighbours disagree (their
+    reference y differ by more than ``JUMP_M`` beyond the depth between them: a slip surface,
+    a growth unit's edge, no rock) each point takes the map of the nearer evaluated row, moved
+    by its depth offset. Units are the nearer row's. Returns (x0, y0, unit) of shape
+    (rows, traces).
+    """
+    nz = depth_m.size
+    rows = np.unique(np.concatenate([np.arange(0, nz, step), [nz - 1]]))
+    X, D = np.meshgrid(x_m, depth_m[rows])
+    x0c, y0c, unitc = (np.asarray(a) for a in reference(X, D))
+    if rows.size == nz:
+        return x0c, y0c, unitc
+    k = np.clip(np.searchsorted(rows, np.arange(nz), side="right") - 1, 0, rows.size - 2)
+    lo, hi = rows[k], rows[k + 1]
+    w = ((np.arange(nz) - lo) / (hi - lo))[:, None]
+    dz = (depth_m[hi] - depth_m[lo])[:, None]
+    a, b = k, k + 1
+    smooth = (np.abs((y0c[a] - y0c[b]) - dz) <= JUMP_M) & (unitc[a] == unitc[b])
+    x0 = np.where(smooth, (1 - w) * x0c[a] + w * x0c[b], np.where(w <= 0.5, x0c[a], x0c[b]))
+    # off the smooth rows: the nearer evaluated point, moved down by the depth between them
+    near_y = np.where(w <= 0.5, y0c[a] - w * dz, y0c[b] + (1 - w) * dz)
+    y0 = np.where(smooth, (1 - w) * y0c[a] + w * y0c[b], near_y)
+    unit = np.where(w <= 0.5, unitc[a], unitc[b])
+    return x0, y0, unit
+
+
 def substeps(cfg: Config) -> int:
     """Odd number of strata steps per grid cell, each at most ``strata_dz_m``."""
     n = int(math.ceil(float(cfg.grid.cell_m) / float(cfg.output.strata_dz_m) - 1e-9))
@@ -142,22 +183,17 @@ def fill_gaps(values: np.ndarray) -> np.ndarray:
     first = np.argmax(~bad, axis=0)
     surface = v[first[has], np.flatnonzero(has)]
     above_value = float(np.median(surface)) if surface.size else 1.0
-    rows = np.arange(v.shape[0])
-    for j in np.flatnonzero(bad.any(axis=0)):
-        ok = ~bad[:, j]
-        if not ok.any():
-            v[:, j] = above_value
-            continue
-        good = rows[ok]
-        v[:good[0], j] = above_value
-        below = np.searchsorted(good, rows)           # first good row at or below
-        above = np.clip(below - 1, 0, good.size - 1)
-        below = np.clip(below, 0, good.size - 1)
-        take = np.where(np.abs(good[below] - rows) <= np.abs(rows - good[above]),
-                        good[below], good[above])
-        inner = bad[:, j] & (rows > good[0])
-        v[inner, j] = v[take[inner], j]
-    return v
+    n = v.shape[0]
+    rows = np.arange(n)[:, None]
+    # the nearest good row above and below every row (-1 / n where there is none)
+    above = np.maximum.accumulate(np.where(bad, -1, rows), axis=0)
+    below = np.flip(np.minimum.accumulate(np.flip(np.where(bad, n, rows), axis=0), axis=0),
+                    axis=0)
+    take = np.where((below < n) & ((above < 0) | (below - rows <= rows - above)), below, above)
+    cols = np.broadcast_to(np.arange(v.shape[1]), v.shape)
+    out = np.where(bad, v[np.clip(take, 0, n - 1), cols], v)
+    out[(rows < np.where(has, first, n)[None, :])] = above_value   # above the rock, or no rock
+    return out
 
 
 def coarse_velocity(vp_fine: np.ndarray, n: int) -> np.ndarray:

@@ -74,9 +74,10 @@ def _psf_aperture(aperture_m: float) -> float:
 def _psf_image(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float, freqs_hz: Sequence[float],
                domain: str = "depth", *, t_s: np.ndarray | None = None,
                psf_max_angle_deg: float = 30.0, psf_aperture_m: float = 0.0,
-               col_step_m: float | None = None) -> np.ndarray:
+               col_step_m: float | None = None, rows_per_cell: int = 1) -> np.ndarray:
     return psf_sections(vp_g, rho_g, cell_m, freqs_hz, psf_max_angle_deg, domain, t_s=t_s,
-                        aperture_m=_psf_aperture(psf_aperture_m), col_step_m=col_step_m)
+                        aperture_m=_psf_aperture(psf_aperture_m), col_step_m=col_step_m,
+                        rows_per_cell=rows_per_cell)
 
 
 ONE_D = ImagingMode(synthetic_sections, title=_title("1-D"))
@@ -94,7 +95,7 @@ def imaging_mode(name: str) -> ImagingMode:
 def imaged_sections(imaging: str, vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
                     freqs_hz: float | Sequence[float], domain: str = "depth", /, *,
                     t_s: np.ndarray | None = None, col_step_m: float | None = None,
-                    **options: Any) -> np.ndarray:
+                    rows_per_cell: int = 1, **options: Any) -> np.ndarray:
     """Sections of the property grids by the mode named ``imaging``, one per frequency.
 
     ``options`` are the mode's per-sample parameters (e.g. ``psf_max_angle_deg``); those it
@@ -102,9 +103,13 @@ def imaged_sections(imaging: str, vp_g: np.ndarray, rho_g: np.ndarray, cell_m: f
     declares and are absent take the mode's defaults. ``col_step_m``: the distance between
     the grids' columns where it is not ``cell_m`` (rows finer than the traces: the ``strata``
     rendering); passed only then, so a mode used only on square cells need not accept it.
+    ``rows_per_cell`` (passed only when not 1): in depth, the grids' rows split the output
+    cells in this odd number and the section is wanted at the cells' centres only.
     """
     mode = imaging_mode(imaging)
     kw = {k: options[k] for k in mode.options if k in options}
     if col_step_m is not None:
         kw["col_step_m"] = col_step_m
+    if rows_per_cell != 1:
+        kw["rows_per_cell"] = rows_per_cell
     return mode.image(vp_g, rho_g, cell_m, freqs_hz, domain, t_s=t_s, **kw)

@@ -374,7 +374,8 @@ def psf_sections(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
                  freqs_hz: float | Sequence[float], max_angle_deg: float = 30.0,
                  domain: str = "depth", *, t_s: np.ndarray | None = None,
                  aperture_m: float = math.inf, taper_deg: float = DEFAULT_TAPER_DEG,
-                 n_windows: int | None = None, col_step_m: float | None = None) -> np.ndarray:
+                 n_windows: int | None = None, col_step_m: float | None = None,
+                 rows_per_cell: int = 1) -> np.ndarray:
     """PSF-imaged, noise-free Ricker sections of a property grid, one per frequency.
 
     The 1-D sections of :func:`demseis.seismic.forward.synthetic_sections` filtered by the
@@ -392,16 +393,24 @@ def psf_sections(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
         vertically (depth domain, infinite aperture), else 4.
     col_step_m : distance between the columns (traces), default ``cell_m``; a grid whose rows
         are finer than its columns (a fine stratigraphy sampled at a survey's traces) sets it.
+    rows_per_cell : depth domain: the grid's rows split output cells in this odd number (as
+        for ``synthetic_sections``); the 1-D section is evaluated at the cells' centres and
+        the dip filter works on those cells (the cells' velocity: the harmonic mean of their
+        rows').
 
     Returns
     -------
     (nf, nz, nx) float32 for depth, (nf, nt, nx) float32 for time.
     """
-    _check_grids(vp_g, rho_g, cell_m)
-    plan = psf_plan(vp_g, cell_m, freqs_hz, max_angle_deg, domain, t_s=t_s,
+    vp, _ = _check_grids(vp_g, rho_g, cell_m)
+    n = rows_per_cell if domain == "depth" else 1
+    sections = synthetic_sections(vp_g, rho_g, cell_m, freqs_hz, domain, t_s=t_s,
+                                  rows_per_cell=n)
+    if n > 1:        # the plan of the output cells: n rows each, two-way time kept
+        vp = 1.0 / (1.0 / vp).reshape(vp.shape[0] // n, n, vp.shape[1]).mean(axis=1)
+    plan = psf_plan(vp, cell_m * n, freqs_hz, max_angle_deg, domain, t_s=t_s,
                     aperture_m=aperture_m, taper_deg=taper_deg, n_windows=n_windows,
-                    col_step_m=col_step_m)
-    sections = synthetic_sections(vp_g, rho_g, cell_m, freqs_hz, domain, t_s=t_s)
+                    col_step_m=cell_m if col_step_m is None else col_step_m)
     if max_angle_deg >= 90.0:
         return sections
     return dip_filter(sections, plan)

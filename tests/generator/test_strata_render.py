@@ -104,3 +104,23 @@ def test_strata_same_bytes_with_two_workers(dem_strata, tmp_path):
     assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(out), "--workers", "2",
                  "--quiet"]) == 0
     assert_same_bytes(dem_strata, out)
+
+
+@pytest.mark.parametrize("domain", ["depth", "time"])
+def test_psf_images_the_strata_at_the_traces(tmp_path, domain):
+    """The 2-D PSF on strata columns: the same shape as the 1-D section, flat reflectors
+    unchanged by the dip filter (undeformed snapshot), dipping ones filtered."""
+    toml = survey("kinematic", "strata", 'imaging = ["1d", "psf"]\npsf_max_angle_deg = 20')
+    store = generate_tiny(tmp_path, toml.replace('domain = "time"', f'domain = "{domain}"'),
+                          "p")
+    root = zarr.open_group(str(store), mode="r")
+    imaging = root["params/imaging"][:]
+    snap = root["params/snapshot"][:]
+    one, psf = (np.flatnonzero((imaging == k) & (snap == 0))[0] for k in (0, 1))
+    a, b = root["seismic"][one], root["seismic"][psf]
+    assert a.shape == b.shape and np.isfinite(b).all()
+    # undeformed: reflectors are flat but for the small lateral variation of the beds
+    assert np.abs(a - b).max() < 0.2 * np.abs(a).max()
+    last = np.flatnonzero(snap == snap.max())
+    c, d = (root["seismic"][i] for i in last[:2])
+    assert not np.allclose(c, d)

@@ -6,6 +6,7 @@ import numpy as np
 from demseis.generator.config import parse_config
 from demseis.generator.layout import sample_shape
 from demseis.generator.survey import (cell_rows, coarse_velocity, damage_factor, fill_gaps,
+                                      reference_points,
                                       fine_depths, labels_at_traces, on_grid, substeps,
                                       trace_spacing, trace_x)
 from demseis.seismic import interface_times
@@ -88,3 +89,27 @@ def test_fill_gaps_takes_one_value_above_the_rock_and_the_nearest_rock_below():
 
 def test_damage_factor():
     np.testing.assert_allclose(damage_factor(np.array([0, 1, 2]), -0.2), [1.0, 0.9, 0.8])
+
+
+def test_reference_points_interpolate_smooth_maps_and_keep_jumps():
+    """A map with a 30 m jump at depth 50.2 m: evaluated every third row and interpolated,
+    it equals the map evaluated everywhere, except the rows between the two evaluated rows
+    that bracket the jump, which take the nearer side's map."""
+    def ref(x, d):
+        y = 1000.0 - d + 0.01 * x + np.where(d > 50.2, 30.0, 0.0)
+        return x + 0.1 * d, y, np.where(d > 80.0, 2, -1)
+
+    x = np.array([0.0, 25.0])
+    z = (np.arange(100) + 0.5) * 1.0
+    x0, y0, unit = reference_points(ref, x, z)
+    X, D = np.meshgrid(x, z)
+    want = ref(X, D)
+    exact = np.ones(100, bool)
+    exact[49:51] = False        # rows 48 and 51 are evaluated: the jump lies between
+    exact[79:81] = False        # rows 78 and 81: the unit changes between
+    np.testing.assert_allclose(x0[exact], want[0][exact], atol=1e-9)
+    np.testing.assert_allclose(y0[exact], want[1][exact], atol=1e-9)
+    # between: the nearer evaluated row's map, moved by the depth: one side or the other
+    for r in (49, 50):
+        assert min(abs(y0[r, 0] - want[1][r, 0]), abs(y0[r, 0] - want[1][r, 0] + 30.0)) < 0.2
+    np.testing.assert_array_equal(unit[np.abs(z - 80.0) > 3.0], want[2][np.abs(z - 80.0) > 3.0])
