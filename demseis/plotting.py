@@ -17,7 +17,7 @@ import numpy as np
 
 from demseis.datasets import open_store, read_particles, read_sample, shard_status
 from demseis.errors import ConfigError, InputError
-from demseis.generator.config import PRESETS, Config, load_config, parse_config
+from demseis.generator.config import PRESETS, Config, load_config, stored_config
 from demseis.generator.engines import get_engine, require_particles
 from demseis.generator.layout import grid_of
 from demseis.generator.runsetup import property_model_of, run_properties
@@ -33,7 +33,7 @@ def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot]]:
     path = Path(source)
     if path.is_dir():
         root = open_store(path)
-        cfg = parse_config(dict(root.attrs)["config"], source=str(path))
+        cfg = stored_config(dict(root.attrs)["config"], source=str(path))
         require_particles(cfg, "preview")
         if run >= cfg.sweep.n_runs:
             raise InputError(f"--run {run}: the store has runs 0..{cfg.sweep.n_runs - 1}")

@@ -292,6 +292,23 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
     return cfg
 
 
+#: ``[output]`` keys added after stores were written, and the value that reproduces the bytes
+#: of a store whose config lacks them
+_STORED_DEFAULTS = {"rendering": "elements"}
+
+
+def stored_config(raw: dict[str, Any], *, source: str = "store config") -> Config:
+    """The config of an existing store (its ``config`` attribute): a key the store's version did
+    not know takes the value that reproduces its bytes (a store written before the ``strata``
+    rendering was rendered from elements), then :func:`parse_config`."""
+    raw = dict(raw)
+    output = dict(raw.get("output", {}))
+    for key, value in _STORED_DEFAULTS.items():
+        output.setdefault(key, value)
+    raw["output"] = output
+    return parse_config(raw, source=source)
+
+
 def _cross_checks(cfg: Config) -> None:
     """Checks that involve more than one key."""
     throw = spec_values_hint(cfg.sweep.params["throw_m"])
@@ -321,7 +338,12 @@ def _cross_checks(cfg: Config) -> None:
             except ConfigError as exc:  # BedModel names its fields strata.<name>
                 raise ConfigError(str(exc).replace("strata.", "sweep.")) from None
     # the engine's own rules (the DEM's: elements fit, a fault can form, quasi-static)
-    ENGINES.get(cfg.model.engine).check(cfg)
+    engine = ENGINES.get(cfg.model.engine)
+    if cfg.output.rendering == "strata" and not getattr(engine, "strata", False):
+        raise ConfigError(f"output.rendering = 'strata' needs an engine whose states carry a "
+                          f"reference map and stratigraphy, and engine {cfg.model.engine!r} "
+                          "has none: set [output] rendering = 'elements'")
+    engine.check(cfg)
 
 
 def _spec_candidates(spec: Spec) -> tuple:

@@ -180,7 +180,8 @@ def imaging_input(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
         return ImagingInput(vp, rho, grid.cell_m, col_step, 1, vp, vp * rho)
     if state.reference is None or state.strata is None:
         raise InputError(f"[output] rendering = 'strata' needs the engine's reference map and "
-                         f"stratigraphy, and the state of snapshot {state.snapshot} has none")
+                         f"stratigraphy, and engine {cfg.model.engine!r} gives none (snapshot "
+                         f"{state.snapshot}): set [output] rendering = 'elements'")
     n = substeps(cfg)
     z = fine_depths(cfg, grid.nz)
     X, D = np.meshgrid(trace_x(cfg), z)

@@ -19,7 +19,7 @@ from demseis.datasets import (
     writer_lock,
 )
 from demseis.errors import StoreError
-from demseis.generator.config import Config, parse_config
+from demseis.generator.config import Config, stored_config
 from demseis.generator.engines import get_engine, require_particles, run_from_particles
 from demseis.generator.render import render_run
 from demseis.generator.sampling import plan_run
@@ -48,7 +48,7 @@ def rerender_config(source_cfg: dict[str, Any], freqs_hz: list[float], snrs_db: 
         raw["sweep"]["psf_aperture_m"] = psf_aperture_m
     raw["sweep"]["renders_per_snapshot"] = 1
     raw["name"] = f"{source_cfg.get('name', 'demseis')}-render"
-    return parse_config(raw, source="re-render config")
+    return stored_config(raw, source="re-render config")
 
 
 def rerender(source: str | Path, out: str | Path, **options: Any) -> SweepSummary:
@@ -79,7 +79,7 @@ def relabel_config(source_cfg: dict[str, Any], labels: dict[str, Any]) -> Config
     the same runs, renders and noise seeds give byte-identical seismic)."""
     raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in source_cfg.items()}
     raw["labels"] = dict(labels)
-    return parse_config(raw, source="relabel config")
+    return stored_config(raw, source="relabel config")
 
 
 def relabel(source: str | Path, out: str | Path, *, labels: dict[str, Any],

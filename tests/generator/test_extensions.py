@@ -19,11 +19,11 @@ from demseis.generator.config import load_config, parse_config
 from demseis.generator.engines import Engine, EngineRun, State, get_engine
 from demseis.generator.layout import grid_of
 from demseis.generator.rerender import rerender
-from demseis.generator.runsetup import run_info
+from demseis.generator.runsetup import run_info, run_strata
 from demseis.registry import ENGINES, IMAGING
 from demseis.schema import (SAMPLE_ARRAYS, SampleArray, engine_labels, register_array,
                             sample_array, stored_arrays)
-from demseis.seismic import ImagingMode, synthetic_sections
+from demseis.seismic import ImagingMode, LayerProperties, synthetic_sections
 
 
 def tiny(**model: Any) -> dict[str, Any]:
@@ -36,6 +36,7 @@ class FlatEngine:
     """No faulting: horizontal beds of alternating rock, the same at every snapshot."""
 
     particles = False
+    strata = True
 
     def __init__(self) -> None:
         self.simulated: list[int] = []
@@ -60,11 +61,25 @@ class FlatEngine:
         bed = (rows // 5).astype(np.int16)
         vp = np.where(bed % 2 == 0, 2500.0, 3200.0)
         rho = np.full(grid.shape, 2300.0)
+        # the strata rendering: the same beds as mechanical units (50 m each, bottom first),
+        # and rock that never moved (reference coordinates = present ones)
+        n = grid.nz // 5
+        top = grid.top_m - 5 * grid.cell_m * np.arange(n)          # unit tops, top first
+        props = LayerProperties(lithology=np.zeros(n, np.int16),
+                                vp=np.where(np.arange(n)[::-1] % 2 == 0, 2500.0, 3200.0),
+                                rho=np.full(n, 2300.0))
+        strata = run_strata(cfg, run.spec.params, run.spec.run, top[::-1] - 5 * grid.cell_m,
+                            top[::-1], props)
+
+        def unmoved(x_m, depth_m):
+            return x_m, grid.top_m - depth_m, np.full(np.shape(x_m), -1)
+
         for k in snapshots:
             labels = {n: np.zeros(grid.shape, sample_array(n).dtype) for n in engine_labels()}
             labels["layer"] = bed
             yield State(snapshot=k, vp_m_s=vp, rho_kg_m3=rho, labels=labels,
-                        values={"step": k, "throw_m": 0.0, "n_elements": 0})
+                        values={"step": k, "throw_m": 0.0, "n_elements": 0},
+                        reference=unmoved, strata=strata)
 
 
 @pytest.fixture
@@ -88,9 +103,26 @@ def test_a_registered_engine_goes_from_generate_to_the_dataset(tmp_path, flat_en
     assert x.shape == (1, *store.layout.shape)
     assert int(y["fault"].sum()) == 0                           # no faulting, no fault label
     assert np.array_equal(y["layer"].numpy()[:, 0], np.arange(store.layout.shape[0]) // 5)
-    # the beds are imaged: flat reflectors, the same in every column
+    # the beds are imaged: flat reflectors, nearly the same in every column (the strata's
+    # beds vary a little along their length)
     sec = np.asarray(store.sample(0)["seismic"])
-    assert np.abs(sec).max() > 0 and np.allclose(sec, sec[:, :1], atol=1e-6)
+    assert np.abs(sec).max() > 0
+    assert np.corrcoef(sec[:, 0], sec[:, -1])[0, 1] > 0.8
+    # an engine without a reference map renders only elements, and says so
+    class NoMap(FlatEngine):
+        strata = False
+
+        def states(self, cfg, run, snapshots):
+            for s in super().states(cfg, run, snapshots):
+                yield State(s.snapshot, s.vp_m_s, s.rho_kg_m3, s.labels, s.values)
+    with ENGINES.registered("nomap", NoMap()):
+        with pytest.raises(ConfigError, match="rendering = 'elements'"):
+            parse_config(tiny(engine="nomap"))
+        raw = tiny(engine="nomap")
+        raw["output"]["rendering"] = "elements"
+        flat = demseis.generate(raw, out=tmp_path / "e.zarr", workers=0, progress=False)
+        sec = np.asarray(flat.sample(0)["seismic"])
+        assert np.abs(sec).max() > 0 and np.allclose(sec, sec[:, :1], atol=1e-6)
     # no particles: commands that need them refuse in one line naming the engine
     with pytest.raises(demseis.DemseisError, match="'flat'"):
         rerender(out, tmp_path / "r.zarr", freqs_hz=[20.0], snrs_db=[np.inf], noise_kind="white",
@@ -104,8 +136,9 @@ def test_unknown_engine_is_a_config_error_listing_the_engines():
         get_engine("nonesuch")
 
 
-def _negated(vp_g, rho_g, cell_m, freqs_hz, domain="depth", *, t_s=None):
-    return -synthetic_sections(vp_g, rho_g, cell_m, freqs_hz, domain, t_s=t_s)
+def _negated(vp_g, rho_g, cell_m, freqs_hz, domain="depth", *, t_s=None, **grid):
+    # ``grid``: col_step_m and rows_per_cell, which the strata rendering passes
+    return -synthetic_sections(vp_g, rho_g, cell_m, freqs_hz, domain, t_s=t_s, **grid)
 
 
 def test_a_registered_imaging_mode_goes_from_generate_to_the_dataset(tmp_path):

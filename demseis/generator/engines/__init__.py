@@ -96,6 +96,9 @@ class Engine(Protocol):
     ----------
     particles : whether the engine's runs have particle snapshots (stored, and needed by
         ``demseis render``, ``relabel`` and ``preview``).
+    strata : (optional, default False) whether its states carry ``reference`` and ``strata``,
+        which ``[output] rendering = "strata"`` (the default) needs; a config asking for it
+        from an engine without is refused at load.
     """
 
     particles: bool

@@ -43,6 +43,7 @@ class DemEngine:
     """The discrete element model as an :class:`~demseis.generator.engines.Engine`."""
 
     particles = True
+    strata = True
 
     def check(self, cfg: Config) -> None:
         """Elements fit the box and the layers, and the DEM's physical sanity rules

@@ -202,6 +202,7 @@ class KinematicEngine:
     """The kinematic engine as an :class:`~demseis.generator.engines.Engine` (no particles)."""
 
     particles = False
+    strata = True
 
     def check(self, cfg: Config) -> None:
         """Nothing beyond each parameter's range: the geometry has no stability limits."""
