@@ -19,6 +19,7 @@ from numcodecs import blosc
 from demseis.datasets._shardio import RawShardReader, raw_shard_layout
 from demseis.datasets.layout import fill_value_for, open_store, store_layout
 from demseis.datasets.status import shard_status
+from demseis.datasets.checked import CheckedArray
 from demseis.datasets.table import FullParams, read_done_params
 from demseis.errors import InputError, StoreError
 
@@ -216,13 +217,8 @@ def read_sample(path: str | Path, index: int, arrays: Sequence[str] | None = Non
     if shard_status(path)[k] != 1:
         raise StoreError(f"sample {index} of {str(path)!r} is in shard {k}, which is not done "
                          "(pending or failed); rerun the generator to complete it")
-    out: dict[str, np.ndarray] = {}
-    for name in names:
-        try:
-            out[name] = np.asarray(group[name][index])
-        except Exception as exc:  # noqa: BLE001 - checksum mismatch, truncated file
-            raise StoreError(f"sample {index} of array {name!r} in {str(path)!r} is damaged "
-                             f"({exc}); run `demseis validate {path}`") from exc
+    # checksums and missing shard files: a StoreError naming the sample and the array
+    out = {name: CheckedArray(group[name], path, name)[index] for name in names}
     params: dict[str, Any] = {}
     for name in layout.params:
         arr = group["params"][name]

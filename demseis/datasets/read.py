@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from demseis.datasets.checked import CheckedArray
 from demseis.datasets.layout import open_store
 from demseis.datasets.status import shard_status
 from demseis.datasets.table import FullParams, read_done_params
@@ -71,7 +72,7 @@ class TruthStore:
     Attributes
     ----------
     path : str
-    fault : zarr.Array, shape (N, H, W), uint8
+    fault : CheckedArray, shape (N, H, W), uint8
     valid : ndarray, shape (N,), bool
         Samples of completed shards.
     params : FullParams
@@ -109,7 +110,8 @@ def open_truth(path: str | Path, array: str = "fault") -> TruthStore:
     if n == 0:
         raise StoreError(f"store {str(path)!r} is empty: {array!r} holds 0 samples")
     valid = done_samples(root, n, path)
-    return TruthStore(path=str(path), fault=fault, valid=valid, params=read_params(path))
+    return TruthStore(path=str(path), fault=CheckedArray(fault, path, array), valid=valid,
+                      params=read_params(path))
 
 
 def open_sections(path: str | Path, array: str = "seismic") -> tuple[Any, NDArray[np.bool_]]:
@@ -122,7 +124,7 @@ def open_sections(path: str | Path, array: str = "seismic") -> tuple[Any, NDArra
     if arr.ndim != 3 or 0 in arr.shape:
         raise StoreError(f"store {str(path)!r}: {array!r} must be a non-empty (N, H, W) "
                          f"array, got shape {arr.shape}")
-    return arr, done_samples(root, int(arr.shape[0]), path)
+    return CheckedArray(arr, path, array), done_samples(root, int(arr.shape[0]), path)
 
 
 def read_section(store: str | Path, sample: int) -> tuple[np.ndarray, dict]:
@@ -135,7 +137,7 @@ def read_section(store: str | Path, sample: int) -> tuple[np.ndarray, dict]:
     need = ("x0_m", "top_m", "cell_m", "nz", "nx")
     if not isinstance(grid, dict) or any(k not in grid for k in need):
         raise StoreError(f"store {str(path)!r} lacks the root attribute 'grid' with keys {need}")
-    arr = group["seismic"]
+    arr = CheckedArray(group["seismic"], path, "seismic")
     n = arr.shape[0]
     if isinstance(sample, bool) or not isinstance(sample, (int, np.integer)) \
             or not 0 <= sample < n:
@@ -145,8 +147,8 @@ def read_section(store: str | Path, sample: int) -> tuple[np.ndarray, dict]:
         raise StoreError(f"seismic sample shape {section.shape} does not match the store grid "
                          f"(nz={grid['nz']}, nx={grid['nx']})")
     if not np.all(np.isfinite(section)):
-        raise StoreError(f"sample {sample} of {str(path)!r} was never written (its shard is "
-                         "missing or unfinished): it holds NaN")
+        raise StoreError(f"sample {sample} of array 'seismic' in {str(path)!r} was never "
+                         "written (its shard is missing or unfinished): it holds NaN")
     return section, dict(grid)
 
 

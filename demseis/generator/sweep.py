@@ -35,6 +35,7 @@ from demseis.datasets import (
     write_shard,
     writer_lock,
 )
+from demseis.datasets.layout import root_metadata_lost
 from demseis.datasets.lock import pid_alive
 from demseis.errors import ConfigError, InputError, SimulationError, StoreError
 from demseis.generator.config import Config, load_config, parse_config
@@ -140,6 +141,8 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
     out = Path(out)
     attrs = store_attrs(cfg)
     if out.exists() and not overwrite:
+        if root_metadata_lost(out):  # its config is lost with it: the arrays must match
+            _create(cfg, out, attrs, overwrite=False)
         stored = read_store_attrs(out)  # raises StoreError for a foreign path
         old = json.loads(json.dumps(stored.get("config")))
         new = json.loads(json.dumps(attrs["config"]))
@@ -152,6 +155,7 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
         # a driver killed mid-write (kill -9) leaves zarr's temporary files; we hold the lock
         # and no task runs yet, so every one of them is stale
         remove_partial_writes(out)
+        _create(cfg, out, attrs, overwrite=False)  # rewrites damaged metadata, checks the layout
         return shard_status(out, verify=True)  # a damaged done shard is redone
     # A new store is built beside ``out`` and renamed into place, so a kill -9 while its
     # arrays are being created leaves no half-made store at ``out`` (found by the kill test).
@@ -160,16 +164,7 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
         _remove_orphan_creations(out)
         out = out.with_name(f".{out.name}.creating-{os.getpid()}")
     try:
-        create_store(
-            out,
-            n_shards=cfg.sweep.n_runs,
-            samples_per_shard=cfg.samples_per_run,
-            shape=sample_shape(cfg),
-            arrays=array_dtypes(cfg),
-            params=store_param_specs(),
-            attrs=attrs,
-            overwrite=overwrite,
-        )
+        _create(cfg, out, attrs, overwrite=overwrite)
     except OSError as exc:  # name the path the user gave, not the temporary one
         if out != target:
             shutil.rmtree(out, ignore_errors=True)
@@ -177,6 +172,14 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
     if out != target:
         os.rename(out, target)
     return shard_status(target)
+
+
+def _create(cfg: Config, out: Path, attrs: dict[str, Any], *, overwrite: bool) -> None:
+    """:func:`~demseis.datasets.create_store` of ``cfg`` at ``out``: a new store, or (an
+    existing one, without ``overwrite``) its damaged metadata rewritten and its layout checked."""
+    create_store(out, n_shards=cfg.sweep.n_runs, samples_per_shard=cfg.samples_per_run,
+                 shape=sample_shape(cfg), arrays=array_dtypes(cfg), params=store_param_specs(),
+                 attrs=attrs, overwrite=overwrite)
 
 
 def _remove_orphan_creations(out: Path) -> None:

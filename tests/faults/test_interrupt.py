@@ -86,3 +86,24 @@ def test_render_progress_bar_is_labelled_render(tmp_path, capsys):
     assert main(["render", str(src), "--freq", "20", "--out", str(tmp_path / "r.zarr")]) == 0
     err = capsys.readouterr().err
     assert "render:" in err and "generate" not in err
+
+
+@pytest.mark.parametrize("command", ["info", "validate"])
+def test_ctrl_c_of_a_read_only_command_says_nothing_about_resuming(tmp_path, monkeypatch,
+                                                                   capsys, command):
+    """issue 30: a read-only command has nothing to resume; its interrupt is one plain line."""
+    import demseis.datasets.validate as validate
+    import demseis.generator.faultinfo as faultinfo
+    from demseis.cli import main
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(validate, "validate_store", interrupted)
+    monkeypatch.setattr(faultinfo, "fault_distribution", interrupted)
+    monkeypatch.setattr("demseis.api.store_summary", interrupted)
+    from tests.datasets._helpers import make_store
+
+    make_store(tmp_path / "s.zarr")
+    assert main([command, str(tmp_path / "s.zarr")]) == 130
+    assert capsys.readouterr().err.strip() == "demseis: interrupted"
