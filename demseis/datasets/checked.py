@@ -32,8 +32,7 @@ class CheckedArray:
     def _damaged(self, samples: Any, exc: BaseException) -> StoreError:
         """The error naming the first damaged sample of ``samples`` (an index, a slice or an
         index array of the first axis), each read alone to find it."""
-        rows = np.arange(self.shape[0])[samples] if not isinstance(samples, (int, np.integer)) \
-            else np.array([int(samples)])
+        rows = _rows(samples, self.shape[0])
         cause = exc
         for i in np.atleast_1d(rows).tolist():
             try:
@@ -53,7 +52,7 @@ class CheckedArray:
         shards = getattr(self._array, "shards", None)
         if not shards:
             return
-        rows = np.atleast_1d(np.arange(self.shape[0])[samples])
+        rows = _rows(samples, self.shape[0])
         base = Path(self.path, *self.name.split("/"), "c")
         for k in np.unique(rows // int(shards[0])).tolist():
             f = base.joinpath(str(k), *("0",) * (self.ndim - 1))
@@ -78,6 +77,17 @@ class CheckedArray:
             return np.asarray(self._array.get_orthogonal_selection(selection))
         except Exception as exc:  # noqa: BLE001
             raise self._damaged(selection[0], exc) from None
+
+
+def _rows(samples: Any, n: int) -> np.ndarray:
+    """The sample indices (along the first axis of length ``n``) that ``samples`` selects: an
+    index, a slice, an index or boolean array; without building an ``arange(n)``."""
+    if isinstance(samples, (int, np.integer)):
+        return np.array([int(samples) % n])
+    if isinstance(samples, slice):
+        return np.arange(*samples.indices(n))
+    arr = np.asarray(samples)
+    return np.flatnonzero(arr) if arr.dtype == bool else arr.astype(np.int64).reshape(-1) % n
 
 
 def _one_line(exc: BaseException) -> str:

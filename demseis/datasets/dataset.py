@@ -20,7 +20,7 @@ from demseis.datasets._shardio import RawShardReader, raw_shard_layout
 from demseis.datasets.layout import fill_value_for, open_store, store_layout
 from demseis.datasets.status import shard_status
 from demseis.datasets.checked import CheckedArray
-from demseis.datasets.table import FullParams, read_done_params
+from demseis.datasets.table import FullParams, read_done_params, shard_params
 from demseis.errors import InputError, StoreError
 
 SPLITS = ("train", "val", "test")
@@ -220,6 +220,13 @@ def read_sample(path: str | Path, index: int, arrays: Sequence[str] | None = Non
     # checksums and missing shard files: a StoreError naming the sample and the array
     out = {name: CheckedArray(group[name], path, name)[index] for name in names}
     params: dict[str, Any] = {}
+    direct = shard_params(path, k, index)  # one file per parameter; None: read through zarr
+    if direct is not None:
+        for name, (values, meta) in direct.items():
+            value = values[index - k * layout.samples_per_shard].item()
+            cats = meta.categories
+            params[name] = cats[int(value)] if cats and 0 <= int(value) < len(cats) else value
+        return Sample(index, out, params)
     for name in layout.params:
         arr = group["params"][name]
         try:

@@ -65,22 +65,24 @@ def done_shard_indices(path: str | Path, n_shards: int) -> np.ndarray:
     return np.flatnonzero(flags == 1).astype(np.int64)
 
 
-def read_param_chunk(path: Path, meta: ArrayMeta, shard: int, s: int) -> np.ndarray:
+def read_param_chunk(path: Path, meta: ArrayMeta, shard: int, s: int,
+                     sample: int | None = None) -> np.ndarray:
     """Chunk ``shard`` (the ``s`` values of one shard) of the parameter ``meta``, its checksum
-    checked; :class:`StoreError` naming the samples and the parameter if it is missing or
-    damaged."""
+    checked; :class:`StoreError` naming the samples (``sample`` alone when given) and the
+    parameter if it is missing or damaged."""
     f = path.joinpath(*meta.path.split("/"), *meta.chunk_key((shard,)).split("/"))
     s0 = shard * s
-    what = f"samples {s0}..{s0 + s - 1} of parameter {meta.path.split('/')[-1]!r} in {str(path)!r}"
+    which = f"sample {sample}" if sample is not None else f"samples {s0}..{s0 + s - 1}"
+    what = f"{which} of parameter {meta.path.split('/')[-1]!r} in {str(path)!r}"
     try:
         data = f.read_bytes()
     except FileNotFoundError:
-        raise StoreError(f"{what} were never written (file {str(f)!r} is missing although the "
+        raise StoreError(f"{what}: never written (file {str(f)!r} is missing although the "
                          f"shard is done); run `demseis validate {path}`") from None
     try:
         return meta.encoder.decode(data, (s,))
     except Exception as exc:  # noqa: BLE001 - crc32c mismatch, undecodable bytes
-        raise StoreError(f"{what} are damaged ({exc} in {str(f)!r}); run "
+        raise StoreError(f"{what}: damaged ({exc} in {str(f)!r}); run "
                          f"`demseis validate {path}`") from None
 
 
@@ -114,6 +116,25 @@ def read_done_params(path: str | Path, names: Sequence[str] | None = None) -> Do
     values = {name: _done_values(path, metas[name], shards, s) for name in wanted}
     categories = {n: list(m.categories) for n, m in metas.items() if m.categories is not None}
     return DoneParams(path, layout, shards, samples, values, categories, metas)
+
+
+def shard_params(path: str | Path, shard: int,
+                 sample: int | None = None) -> dict[str, tuple[np.ndarray, ArrayMeta]] | None:
+    """Every parameter of shard ``shard``: name -> (its S values, its metadata), each chunk
+    read directly with its crc32c checked (one file per parameter, no zarr round trip); None
+    for a store laid out otherwise (read it through zarr). ``sample``: the sample an error
+    names."""
+    path = Path(path)
+    members = array_metas(path)
+    try:
+        layout = layout_of(members)
+    except StoreError:
+        return None
+    if not _direct_readable(members, layout):
+        return None
+    s = layout.samples_per_shard
+    return {n: (read_param_chunk(path, members[f"params/{n}"], shard, s, sample),
+                members[f"params/{n}"]) for n in layout.params}
 
 
 def _direct_readable(members: Mapping[str, ArrayMeta], layout: StoreLayout) -> bool:

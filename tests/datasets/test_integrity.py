@@ -276,7 +276,7 @@ def test_info_of_a_store_with_a_damaged_parameter_is_one_line(tmp_path, pristine
     assert main(["info", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "samples 12..17 of parameter 'freq_hz'" in err[0]
-    assert "damaged (crc32c mismatch" in err[0]
+    assert "damaged (crc32c mismatch" in err[0], err[0]
 
 
 def test_store_sample_of_a_damaged_sample_fails_clearly(tmp_path, pristine):

@@ -23,24 +23,8 @@ import pytest
 
 from tests.faults._helpers import ROOT
 
-CONFIG = """name = "matrix"
-[sweep]
-seed = 0
-n_runs = 3
-dip_deg = [45, 60]
-throw_m = 100
-n_layers = 8
-freq_hz = 30
-snr_db = [inf, 10]
-noise_kind = "white"
-[model]
-engine = "kinematic"
-width_m = 600.0
-height_m = 300.0
-n_snapshots = 2
-[grid]
-cell_m = 10.0
-"""
+#: the tiny preset with 3 runs of the fast kinematic engine
+CONFIG = '[sweep]\nn_runs = 3\n[model]\nengine = "kinematic"\n'
 
 DAMAGE = ("truncated-chunk", "flipped-bytes", "array-meta-truncated", "array-meta-missing",
           "root-meta-truncated", "root-meta-missing", "missing-shard")
@@ -66,8 +50,8 @@ def pristine(tmp_path_factory) -> Path:
     """A finished 3-run kinematic store (with its config file and zero predictions)."""
     base = tmp_path_factory.mktemp("matrix")
     (base / "c.toml").write_text(CONFIG)
-    r = _run(["-m", "demseis", "generate", "c.toml", "--out", "s.zarr", "--workers", "0",
-              "--quiet"], base)
+    r = _run(["-m", "demseis", "generate", "c.toml", "--preset", "tiny", "--out", "s.zarr",
+              "--workers", "0", "--quiet"], base)
     assert r.returncode == 0, r.stderr
     from demseis.datasets import read_layout
 
@@ -162,7 +146,7 @@ def test_generate_repairs_every_damage(tmp_path, pristine, kind):
     shutil.copytree(pristine / "s.zarr", tmp_path / "s.zarr")
     shutil.copy(pristine / "c.toml", tmp_path / "c.toml")
     damage(tmp_path / "s.zarr", kind)
-    r = _run(["-m", "demseis", "generate", "c.toml", "--out", "s.zarr", "--workers", "0",
-              "--quiet"], tmp_path)
+    r = _run(["-m", "demseis", "generate", "c.toml", "--preset", "tiny", "--out", "s.zarr",
+              "--workers", "0", "--quiet"], tmp_path)
     assert r.returncode == 0, r.stderr[-3000:]
     assert _digest(tmp_path / "s.zarr") == _digest(pristine / "s.zarr")
