@@ -16,6 +16,7 @@ generator and the scoring code (``demseis.open`` needs neither)::
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -25,17 +26,6 @@ from demseis.datasets import FaultSegDataset, open_store, read_sample, store_lay
 from demseis.datasets.read import done_samples, read_params, store_summary
 from demseis.errors import InputError, StoreError
 from demseis.generator.workers import start_forkserver
-
-
-def _decode(values: np.ndarray, attrs: dict[str, Any]) -> np.ndarray:
-    """A categorical parameter as strings (integer codes decoded with the names in its array's
-    ``categories`` attribute, which every categorical parameter of a schema-2 store has)."""
-    names = attrs.get("categories")
-    if names is None or values.dtype.kind not in "iu":
-        return values
-    table = np.asarray(list(names) + ["?"], dtype=str)
-    idx = np.where((values >= 0) & (values < len(names)), values, len(names))
-    return table[idx]
 
 
 class Store:
@@ -58,7 +48,7 @@ class Store:
         self.path = Path(path)
         self._root = open_store(self.path, "r")
         self.layout = store_layout(self._root)
-        self._params: dict[str, np.ndarray] | None = None
+        self._params: Mapping[str, np.ndarray] | None = None
         #: what :func:`generate` did (a SweepSummary), None for an opened store
         self.run_summary: Any = None
 
@@ -88,17 +78,13 @@ class Store:
         return done_samples(self._root, len(self), self.path, require_any=False)
 
     @property
-    def params(self) -> dict[str, np.ndarray]:
+    def params(self) -> Mapping[str, np.ndarray]:
         """The per-sample parameter table: name -> (N,) array (categorical ones as strings).
 
         ``demseis params`` and ``docs/parameters.md`` describe every column.
         """
-        if self._params is None:
-            raw = read_params(self._root, len(self))
-            self._params = {
-                k: _decode(v, dict(self._root["params"][k].attrs))
-                for k, v in raw.items()
-            }
+        if self._params is None:  # each (N,) column is read when first asked for
+            self._params = read_params(self.path, decode=True)
         return self._params
 
     def sample(self, index: int) -> dict[str, Any]:
@@ -120,9 +106,10 @@ class Store:
             raise StoreError(f"sample {i} of {str(self.path)!r} belongs to a shard that is not "
                              "complete; finish the sweep first (rerun demseis generate)")
         # checksums checked: a damaged sample is a StoreError naming the sample and the array
-        out: dict[str, Any] = dict(read_sample(self.path, i, self.arrays).arrays)
-        for k, v in self.params.items():
-            out[k] = v[i].item() if hasattr(v[i], "item") else v[i]
+        sample = read_sample(self.path, i, self.arrays)
+        out: dict[str, Any] = dict(sample.arrays)
+        for k, v in sample.params.items():  # categorical ones as their names
+            out[k] = v.item() if hasattr(v, "item") else v
         return out
 
     def summary(self) -> str:

@@ -27,6 +27,10 @@ from demseis import __version__
 from demseis.errors import DemseisError
 
 
+#: commands that write a store: an interrupted one resumes when run again
+WRITING_COMMANDS = frozenset({"generate", "render", "relabel"})
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser with every subpackage's subcommands registered."""
     # imported here so that main() also turns a Ctrl-C during these imports into its message
@@ -84,7 +88,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         # (a shard counts only once its done flag is set), so that message is noise.
         logging.getLogger("asyncio").setLevel(logging.CRITICAL)
         warnings.filterwarnings("ignore", message="coroutine .* was never awaited")
-        print("demseis: interrupted; run the same command to resume", file=sys.stderr)
+        command = getattr(locals().get("args"), "command", None)
+        if command in WRITING_COMMANDS:
+            print("demseis: interrupted; run the same command to resume", file=sys.stderr)
+        else:  # a read-only command has nothing to resume
+            print("demseis: interrupted", file=sys.stderr)
         return 130
 
 

@@ -38,13 +38,16 @@ from demseis.datasets.status import (
     remove_partial_writes,
     shard_status,
 )
+from demseis.datasets.table import DoneParams, FullParams, read_done_params
 from demseis.datasets.validate import ValidationReport, validate_store
 from demseis.datasets.write import write_shard
 from demseis.datasets.xarray_io import to_xarray
 
 __all__ = [
     "SCHEMA_VERSION",
+    "DoneParams",
     "FaultSegDataset",
+    "FullParams",
     "ParamSpec",
     "Sample",
     "ShardAwareSampler",
@@ -56,6 +59,7 @@ __all__ = [
     "finalize_store",
     "open_store",
     "read_layout",
+    "read_done_params",
     "read_particles",
     "read_sample",
     "read_store_attrs",

@@ -341,6 +341,8 @@ class ArrayMeta:
     fill_value : the fill value (a chunk equal to it is not written, as zarr does).
     encoder : codecs of one (inner) chunk.
     key_separator : separator of the chunk key (``c/0/0/0``).
+    categories : the names of the codes of a categorical parameter (its ``categories``
+        attribute), else None.
     """
 
     path: str
@@ -351,6 +353,7 @@ class ArrayMeta:
     fill_value: Any
     encoder: ChunkEncoder
     key_separator: str = "/"
+    categories: tuple[str, ...] | None = None
 
     def chunk_key(self, coords: Sequence[int]) -> str:
         """Key (path below the array) of the chunk or shard file at grid position ``coords``."""
@@ -365,6 +368,7 @@ class ChunkEncoder:
 
     dtype: np.dtype                                   # on-disk dtype, with its byte order
     steps: tuple[Callable[[bytes], bytes], ...] = ()  # bytes -> bytes codecs, in order
+    names: tuple[str, ...] = ()                       # their names (blosc, zstd, crc32c)
 
     def encode(self, chunk: np.ndarray) -> bytes:
         """Encoded bytes of ``chunk`` (C order, as zarr's ``bytes`` codec flattens it)."""
@@ -372,6 +376,25 @@ class ChunkEncoder:
         for step in self.steps:
             data = step(data)
         return data
+
+    def decode(self, data: bytes | np.ndarray, shape: Sequence[int]) -> np.ndarray:
+        """The chunk of ``shape`` encoded as ``data`` (the inverse of :meth:`encode`), its
+        crc32c checked; ``ValueError`` saying what is wrong (``crc32c mismatch``, a size that
+        does not fit) for damaged bytes."""
+        buf = np.frombuffer(data, dtype=np.uint8)
+        for name in reversed(self.names):
+            if name == "crc32c":
+                if not crc_ok(buf):
+                    raise ValueError("crc32c mismatch")
+                buf = buf[:-CRC_NBYTES]
+            elif name == "zstd":
+                buf = np.frombuffer(Zstd().decode(bytes(buf)), dtype=np.uint8)
+            else:  # blosc
+                buf = np.frombuffer(blosc.decompress(bytes(buf)), dtype=np.uint8)
+        n = int(np.prod(shape)) * self.dtype.itemsize
+        if buf.shape[0] != n:
+            raise ValueError(f"decodes to {buf.shape[0]} bytes, expected {n}")
+        return buf.view(self.dtype).reshape(tuple(shape)).astype(self.dtype.newbyteorder("="))
 
 
 def _append_crc32c(data: bytes) -> bytes:
@@ -406,7 +429,9 @@ def chunk_encoder(codecs: Sequence[Mapping[str, Any]], dtype: np.dtype, where: s
     endian = (codecs[0].get("configuration") or {}).get("endian", "little")
     disk = np.dtype(dtype).newbyteorder({"little": "<", "big": ">"}[endian])
     steps = []
+    step_names = []
     for c in codecs[1:]:
+        step_names.append(str(c.get("name")))
         conf = c.get("configuration") or {}
         if c.get("name") == "crc32c":
             steps.append(_append_crc32c)
@@ -417,7 +442,7 @@ def chunk_encoder(codecs: Sequence[Mapping[str, Any]], dtype: np.dtype, where: s
         else:
             raise StoreError(f"{where}: codec {c.get('name')!r} is not one the direct writer "
                              "encodes (blosc, zstd, crc32c)")
-    return ChunkEncoder(disk, tuple(steps))
+    return ChunkEncoder(disk, tuple(steps), tuple(step_names))
 
 
 _FLOAT_FILLS = {"NaN": float("nan"), "Infinity": float("inf"), "-Infinity": float("-inf")}
@@ -450,6 +475,8 @@ def array_meta(store: str | Path, name: str, meta: Mapping[str, Any]) -> ArrayMe
         cke = meta.get("chunk_key_encoding", {})
         codecs = list(meta["codecs"])
         fill = _fill_value(meta["fill_value"], dtype)
+        cats = (meta.get("attributes") or {}).get("categories")
+        cats = None if cats is None else tuple(str(c) for c in cats)
     except (KeyError, TypeError, ValueError) as exc:
         raise StoreError(f"{where}: unreadable metadata ({exc!r})") from None
     if grid.get("name") != "regular" or cke.get("name") != "default":
@@ -468,8 +495,9 @@ def array_meta(store: str | Path, name: str, meta: Mapping[str, Any]) -> ArrayMe
             raise StoreError(f"{where}: a shard layout the direct writer does not encode "
                              f"({conf})")
         encoder = chunk_encoder(conf.get("codecs", ()), dtype, where)
-        return ArrayMeta(name, shape, dtype, inner, outer, fill, encoder, sep)
-    return ArrayMeta(name, shape, dtype, outer, None, fill, chunk_encoder(codecs, dtype, where), sep)
+        return ArrayMeta(name, shape, dtype, inner, outer, fill, encoder, sep, cats)
+    return ArrayMeta(name, shape, dtype, outer, None, fill, chunk_encoder(codecs, dtype, where),
+                     sep, cats)
 
 
 def is_fill(chunk: np.ndarray, fill_value: Any) -> bool:

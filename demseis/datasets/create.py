@@ -32,6 +32,7 @@ from demseis.datasets.layout import (
     fill_value_for,
     is_demseis_store,
     open_store,
+    root_metadata_lost,
     store_layout,
 )
 from demseis.errors import InputError, StoreError
@@ -184,7 +185,10 @@ def create_store(
     If ``path`` already holds a demseis store and ``overwrite`` is False, this is a resume:
     the store is left as it is (attrs untouched; compare
     :func:`~demseis.datasets.layout.stored_config` first) and returned, provided its layout
-    equals the requested one; otherwise :class:`StoreError` names the difference.
+    equals the requested one; otherwise :class:`StoreError` names the difference. Damaged
+    metadata is rewritten first (:func:`repair_metadata`): an array's or group's ``zarr.json``
+    that is missing or does not parse, and a lost root ``zarr.json`` of a store whose
+    ``shard_done`` array is intact (then the root is written from ``attrs``).
 
     Raises
     ------
@@ -193,8 +197,6 @@ def create_store(
     InputError
         A bad argument.
     """
-    import zarr
-
     path = Path(path)
     if int(n_shards) < 1 or int(n_shards) != n_shards:
         raise InputError(f"n_shards must be a positive integer, got {n_shards!r}")
@@ -215,11 +217,16 @@ def create_store(
         raise InputError(f"attrs are not JSON-serialisable: {exc}") from exc
     wanted = StoreLayout(int(n_shards), int(samples_per_shard), shape_t, array_dtypes, param_dtypes)
 
+    files = _store_files(wanted, param_specs, attrs)
     if path.exists():
         if not path.is_dir():
             raise StoreError(f"{str(path)!r} exists and is a file, not a store directory")
+        if not overwrite and root_metadata_lost(path):
+            # a resume finds the root document damaged: the arrays say it is a demseis store
+            put_files(path, {"zarr.json": files["zarr.json"]})
         if is_demseis_store(path):
             if not overwrite:
+                repair_metadata(path, files)
                 group = open_store(path, "r+")  # schema version check
                 have = store_layout(group)
                 diffs = have.describe_difference(wanted)
@@ -235,17 +242,46 @@ def create_store(
                 f"{str(path)!r} exists, is not empty and is not a demseis store; "
                 "refusing to write into or delete it"
             )
+    put_files(path, files)
+    return open_store(path, "r+")
+
+
+def repair_metadata(path: Path, files: Mapping[str, bytes]) -> list[str]:
+    """Rewrite each metadata document of ``files`` (key -> the bytes create_store writes)
+    that is missing or does not parse as JSON below ``path`` (the root ``zarr.json`` is left
+    to the caller: it holds the store's config and its consolidated metadata). A document
+    that parses but differs is left alone: the layout check names the difference. Returns the
+    keys rewritten."""
+    fixed = []
+    for key, data in files.items():
+        if key == "zarr.json" or not key.endswith("zarr.json"):
+            continue
+        f = path.joinpath(*key.split("/"))
+        try:
+            json.loads(f.read_bytes())
+            continue
+        except (OSError, ValueError):
+            put_files(path, {key: data})
+            fixed.append(key)
+    return fixed
+
+
+def _store_files(wanted: StoreLayout, param_specs: Mapping[str, ParamSpec],
+                 attrs: Mapping[str, Any]) -> dict[str, bytes]:
+    """Every file :func:`create_store` writes for the layout ``wanted`` (key -> bytes): the
+    metadata of the root, the groups and the arrays, and the coordinate arrays' chunks."""
+    import zarr
 
     root_attrs = {
         "demseis": {"schema_version": SCHEMA_VERSION, "package_version": __version__},
         **attrs,
     }
-    h, w = shape_t
+    h, w = wanted.shape
     n = wanted.n_samples
     s = wanted.samples_per_shard
-    row_dim, coords = _grid_coords(attrs.get("grid"), shape_t)
+    row_dim, coords = _grid_coords(attrs.get("grid"), wanted.shape)
     specs: dict[str, dict[str, Any]] = {}  # array path -> create_array keywords
-    for name, dtype in array_dtypes.items():
+    for name, dtype in wanted.arrays.items():
         spec = sample_array(name)
         specs[name] = dict(
             shape=(n, h, w),
@@ -290,8 +326,7 @@ def create_store(
         create_arrays(store, specs)
         group.create_group("particles")
 
-    put_files(path, zarr_files(build))
-    return open_store(path, "r+")
+    return zarr_files(build)
 
 
 def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.ndarray]]:

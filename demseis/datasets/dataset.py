@@ -19,6 +19,8 @@ from numcodecs import blosc
 from demseis.datasets._shardio import RawShardReader, raw_shard_layout
 from demseis.datasets.layout import fill_value_for, open_store, store_layout
 from demseis.datasets.status import shard_status
+from demseis.datasets.checked import CheckedArray
+from demseis.datasets.table import FullParams, read_done_params, shard_params
 from demseis.errors import InputError, StoreError
 
 SPLITS = ("train", "val", "test")
@@ -215,14 +217,16 @@ def read_sample(path: str | Path, index: int, arrays: Sequence[str] | None = Non
     if shard_status(path)[k] != 1:
         raise StoreError(f"sample {index} of {str(path)!r} is in shard {k}, which is not done "
                          "(pending or failed); rerun the generator to complete it")
-    out: dict[str, np.ndarray] = {}
-    for name in names:
-        try:
-            out[name] = np.asarray(group[name][index])
-        except Exception as exc:  # noqa: BLE001 - checksum mismatch, truncated file
-            raise StoreError(f"sample {index} of array {name!r} in {str(path)!r} is damaged "
-                             f"({exc}); run `demseis validate {path}`") from exc
+    # checksums and missing shard files: a StoreError naming the sample and the array
+    out = {name: CheckedArray(group[name], path, name)[index] for name in names}
     params: dict[str, Any] = {}
+    direct = shard_params(path, k, index)  # one file per parameter; None: read through zarr
+    if direct is not None:
+        for name, (values, meta) in direct.items():
+            value = values[index - k * layout.samples_per_shard].item()
+            cats = meta.categories
+            params[name] = cats[int(value)] if cats and 0 <= int(value) < len(cats) else value
+        return Sample(index, out, params)
     for name in layout.params:
         arr = group["params"][name]
         try:
@@ -320,29 +324,23 @@ class FaultSegDataset:
         self.crop = _normalise_crop(crop, layout.shape)
 
         s = layout.samples_per_shard
-        done = shard_status(self.path) == 1
-        sample_ok = np.repeat(done, s)
-        params, categories = {}, {}
-        for n in layout.params:
-            arr = group["params"][n]
-            try:
-                params[n] = np.asarray(arr[...])
-            except Exception as exc:  # noqa: BLE001 - a damaged chunk: name it
-                raise StoreError(f"parameter {n!r} of store {self.path!r} is unreadable ({exc}); "
-                                 f"run `demseis validate {self.path}`") from exc
-            if arr.attrs.get("categories") is not None:
-                categories[n] = list(arr.attrs["categories"])
-        self.categories = categories
-        n_done = int(sample_ok.sum())
-        sample_ok &= _where_mask(where, params, layout.n_samples, categories)
+        # the done samples and their parameters only: no cost per pending shard
+        table = read_done_params(self.path)
+        self.categories = dict(table.categories)
+        done_idx, params = table.samples, table.values
+        n_done = int(done_idx.size)
+        if callable(where):  # promised the (N,) columns of every sample
+            sample_ok = _where_mask(where, FullParams(table), layout.n_samples)[done_idx]
+        else:
+            sample_ok = _where_mask(where, params, n_done, self.categories)
         if where is not None and n_done and not sample_ok.any():
             raise InputError(f"where={where!r} selects none of the {n_done} done samples of "
                              f"{self.path!r}")
         if split is not None:
             labels = split_of_shards(layout.n_shards, split_fractions, split_seed)
-            sample_ok &= np.repeat(labels == SPLITS.index(split), s)
-        self.indices = np.nonzero(sample_ok)[0].astype(np.int64)
-        self._params = {n: v[self.indices] for n, v in params.items()}
+            sample_ok &= labels[done_idx // s] == SPLITS.index(split)
+        self.indices = done_idx[sample_ok].astype(np.int64)
+        self._params = {n: v[sample_ok] for n, v in params.items()}
         self._arrays: dict[str, Any] | None = None
         self._raw: dict[str, RawShardReader] = {}
 

@@ -12,13 +12,15 @@ shard file changes: :class:`~demseis.datasets._shardio.RawShardReader`).
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 
 from demseis.datasets._shardio import CRC_NBYTES, check_chunk_file, check_shard_file, crc_ok
-from demseis.datasets.layout import open_store, store_layout
+from demseis.datasets.layout import array_metas, open_store, store_layout
 from demseis.datasets.particles import PARTICLE_FIELDS, particle_group_name
+from demseis.errors import StoreError
 
 
 def read_done_flags(path: str | Path, n_shards: int, array=None) -> tuple[np.ndarray, list[int]]:
@@ -39,10 +41,17 @@ def read_done_flags(path: str | Path, n_shards: int, array=None) -> tuple[np.nda
     flags = np.zeros(n_shards, dtype=np.uint8)
     damaged = []
     base = Path(path) / "shard_done" / "c"
-    for k in range(n_shards):
+    # only the flags of shards written so far have a file (a pending flag is the fill value 0,
+    # which deletes it): list them instead of probing every shard, so a store planned for 10^6
+    # runs with a few done costs what those few cost
+    try:
+        names = os.listdir(base)
+    except FileNotFoundError:
+        names = []
+    for k in sorted(int(n) for n in names if n.isdigit() and int(n) < n_shards):
         try:
             data = (base / str(k)).read_bytes()
-        except FileNotFoundError:
+        except FileNotFoundError:  # cleared meanwhile by a rewrite of the shard
             continue
         arr = np.frombuffer(data, dtype=np.uint8)
         if arr.shape[0] != 1 + CRC_NBYTES or not crc_ok(arr):
@@ -63,7 +72,7 @@ def _fmt(values: list[int], limit: int = 8) -> str:
     return ", ".join(vals) + (f" ... (+{more})" if more > 0 else "")
 
 
-def shard_damage(path: str | Path, k: int, group=None, layout=None) -> list[str]:
+def shard_damage(path: str | Path, k: int, group=None, layout=None, metas=None) -> list[str]:
     """One line per damaged file of shard ``k`` (empty when every checksum holds).
 
     Checks each sample array's shard file (index and every chunk, naming the damaged samples),
@@ -104,7 +113,7 @@ def shard_damage(path: str | Path, k: int, group=None, layout=None) -> list[str]
             out.append(f"shard {k}: parameter {name} is damaged in samples {s0}..{s0 + s - 1} "
                        f"({problem})")
         elif name == "run_id":
-            ids = np.unique(group["params"]["run_id"][s0: s0 + s])
+            ids = np.unique(_run_ids(path, k, s, group, metas))
             run_id = int(ids[0]) if ids.size == 1 else k
     run_dir = path / particle_group_name(run_id)
     if (run_dir / "zarr.json").is_file():
@@ -116,6 +125,17 @@ def shard_damage(path: str | Path, k: int, group=None, layout=None) -> list[str]
     return out
 
 
+def _run_ids(path: Path, k: int, s: int, group, metas) -> np.ndarray:
+    """``params/run_id`` of shard ``k`` (checksum already checked), decoded directly (no zarr
+    round trip per shard: 20-40 ms each) when its metadata is in ``metas``, else through
+    zarr."""
+    meta = (metas or {}).get("params/run_id")
+    if meta is not None:
+        f = path / "params" / "run_id" / meta.chunk_key((k,))
+        return meta.encoder.decode(f.read_bytes(), (s,))
+    return np.asarray(group["params"]["run_id"][k * s: (k + 1) * s])
+
+
 def damaged_shards(path: str | Path, group=None) -> dict[int, list[str]]:
     """Damage of every done shard: shard -> problem lines (only damaged shards; a damaged
     done flag counts as a damaged shard)."""
@@ -124,8 +144,12 @@ def damaged_shards(path: str | Path, group=None) -> dict[int, list[str]]:
     flags, bad_flags = read_done_flags(path, layout.n_shards, group["shard_done"])
     out: dict[int, list[str]] = {k: [f"shard {k}: done flag is damaged (crc32c mismatch)"]
                                  for k in bad_flags}
+    try:
+        metas = array_metas(Path(path))
+    except StoreError:  # codecs the direct reader does not know: run ids through zarr
+        metas = {}
     for k in np.flatnonzero(flags == 1).tolist():
-        problems = shard_damage(path, k, group, layout)
+        problems = shard_damage(path, k, group, layout, metas)
         if problems:
             out[k] = problems
     return dict(sorted(out.items()))

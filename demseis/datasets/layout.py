@@ -75,6 +75,19 @@ def _root_metadata(path: Path) -> dict | None:
         return None
 
 
+def root_metadata_lost(path: Path) -> bool:
+    """True when the root ``zarr.json`` of ``path`` is missing or unreadable while the store's
+    ``shard_done`` array is intact: a demseis store whose root document was damaged (which
+    :func:`~demseis.datasets.create.create_store` rewrites on resume)."""
+    if _root_metadata(path) is not None:
+        return False
+    try:
+        meta = json.loads((path / "shard_done" / "zarr.json").read_bytes())
+    except (OSError, ValueError):
+        return False
+    return isinstance(meta, dict) and meta.get("node_type") == "array"
+
+
 def is_demseis_store(path: Path) -> bool:
     """True when ``path`` holds the root group of a demseis store (of any schema version)."""
     meta = _root_metadata(path)
@@ -168,11 +181,20 @@ def _array_members(group) -> dict:
     one ``group[name]`` at a time, the ~90 reads took 0.1-0.2 s)."""
     import zarr
 
-    members = dict(group.members())
-    out = {k: v for k, v in members.items() if isinstance(v, zarr.Array)}
-    if isinstance(members.get("params"), zarr.Group):
-        out.update({f"params/{k}": v for k, v in members["params"].members()
-                    if isinstance(v, zarr.Array)})
+    try:
+        with warnings.catch_warnings():  # an array directory without zarr.json: named below
+            warnings.filterwarnings("ignore", message=".*not recognized as a component.*")
+            members = dict(group.members())
+        out = {k: v for k, v in members.items() if isinstance(v, zarr.Array)}
+        if isinstance(members.get("params"), zarr.Group):
+            out.update({f"params/{k}": v for k, v in members["params"].members()
+                        if isinstance(v, zarr.Array)})
+    except Exception as exc:  # noqa: BLE001 - a damaged zarr.json of an array (JSON, schema)
+        text = " ".join(str(exc).split())[:200]
+        where = str(getattr(group.store, "root", group.store))
+        raise StoreError(f"a metadata file (zarr.json) of store {where!r} is damaged "
+                         f"({type(exc).__name__}: {text}); `demseis validate` names it, "
+                         "`demseis generate` rewrites it") from None
     return out
 
 
@@ -204,6 +226,41 @@ def array_metas(path: Path) -> dict[str, ArrayMeta]:
                 raise StoreError(f"cannot read {str(meta_file)!r}: {exc}") from exc
             if isinstance(meta, dict) and meta.get("node_type") == "array":
                 out[prefix + name] = array_meta(path, prefix + name, meta)
+    return out
+
+
+def metadata_problems(path: str | Path) -> list[str]:
+    """One line per damaged metadata document below the root of the store at ``path``: every
+    group and array directory must hold a ``zarr.json`` that parses as JSON, is a Zarr v3 group
+    or array, and (for an array) has metadata the direct writer understands (data type, shape,
+    chunk grid, codecs). Chunk directories (``c/``) are not entered, so the cost is that of the
+    metadata files, whatever the number of chunks."""
+    path = Path(path)
+    out: list[str] = []
+    for top, dirs, _files in os.walk(path):
+        here = Path(top)
+        rel = here.relative_to(path).as_posix()
+        dirs[:] = sorted(d for d in dirs if d != "c")
+        if rel == ".":
+            continue
+        meta_file = here / "zarr.json"
+        try:
+            meta = json.loads(meta_file.read_bytes())
+        except FileNotFoundError:
+            out.append(f"metadata of {rel!r} is missing (no {str(meta_file)!r})")
+            continue
+        except (OSError, ValueError) as exc:
+            out.append(f"metadata of {rel!r} is damaged ({str(meta_file)!r}: {exc})")
+            continue
+        kind = meta.get("node_type") if isinstance(meta, dict) else None
+        if kind not in ("array", "group") or meta.get("zarr_format") != 3:
+            out.append(f"metadata of {rel!r} is not a Zarr v3 group or array "
+                       f"({str(meta_file)!r})")
+        elif kind == "array":
+            try:
+                array_meta(path, rel, meta)
+            except StoreError as exc:
+                out.append(f"metadata of {rel!r} is damaged ({exc})")
     return out
 
 

@@ -16,8 +16,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from demseis.datasets.checked import CheckedArray
 from demseis.datasets.layout import open_store
 from demseis.datasets.status import shard_status
+from demseis.datasets.table import FullParams, read_done_params
 from demseis.errors import InputError, StoreError
 from demseis.schema import SAMPLE_ARRAYS
 from demseis.seismic.segy import write_segy
@@ -56,19 +58,11 @@ def done_samples(root: Any, n: int, path: str | Path, *,
     return valid
 
 
-def read_params(root: Any, n: int) -> dict[str, NDArray[Any]]:
-    """Per-sample parameters of an open store: name -> (n,) array from ``params/``."""
-    params: dict[str, NDArray[Any]] = {}
-    if "params" in set(root.group_keys()):
-        for key in sorted(root["params"].array_keys()):
-            try:
-                arr = np.asarray(root["params"][key][:])
-            except Exception as exc:  # noqa: BLE001 - a chunk failing its checksum
-                raise StoreError(f"parameter {key!r} of the store is damaged ({exc}); run "
-                                 "`demseis validate` to list the damaged shards") from exc
-            if arr.shape == (n,):
-                params[key] = arr
-    return params
+def read_params(path: str | Path, *, decode: bool = False) -> FullParams:
+    """Per-sample parameters of a store: name -> (N,) array (fill values outside the done
+    samples; categorical ones as names with ``decode``), each read when first asked for, from
+    the done shards only (:mod:`demseis.datasets.table`)."""
+    return FullParams(read_done_params(path, ()), decode=decode)
 
 
 @dataclass(frozen=True)
@@ -78,17 +72,18 @@ class TruthStore:
     Attributes
     ----------
     path : str
-    fault : zarr.Array, shape (N, H, W), uint8
+    fault : CheckedArray, shape (N, H, W), uint8
     valid : ndarray, shape (N,), bool
         Samples of completed shards.
-    params : dict[str, ndarray]
-        Per-sample parameters from ``params/``, each shape (N,).
+    params : FullParams
+        Per-sample parameters from ``params/``, each shape (N,) (read when first asked for;
+        ``params.take(samples)`` reads them at a few samples).
     """
 
     path: str
     fault: Any
     valid: NDArray[np.bool_]
-    params: dict[str, NDArray[Any]]
+    params: FullParams
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -115,7 +110,8 @@ def open_truth(path: str | Path, array: str = "fault") -> TruthStore:
     if n == 0:
         raise StoreError(f"store {str(path)!r} is empty: {array!r} holds 0 samples")
     valid = done_samples(root, n, path)
-    return TruthStore(path=str(path), fault=fault, valid=valid, params=read_params(root, n))
+    return TruthStore(path=str(path), fault=CheckedArray(fault, path, array), valid=valid,
+                      params=read_params(path))
 
 
 def open_sections(path: str | Path, array: str = "seismic") -> tuple[Any, NDArray[np.bool_]]:
@@ -128,7 +124,7 @@ def open_sections(path: str | Path, array: str = "seismic") -> tuple[Any, NDArra
     if arr.ndim != 3 or 0 in arr.shape:
         raise StoreError(f"store {str(path)!r}: {array!r} must be a non-empty (N, H, W) "
                          f"array, got shape {arr.shape}")
-    return arr, done_samples(root, int(arr.shape[0]), path)
+    return CheckedArray(arr, path, array), done_samples(root, int(arr.shape[0]), path)
 
 
 def read_section(store: str | Path, sample: int) -> tuple[np.ndarray, dict]:
@@ -141,7 +137,7 @@ def read_section(store: str | Path, sample: int) -> tuple[np.ndarray, dict]:
     need = ("x0_m", "top_m", "cell_m", "nz", "nx")
     if not isinstance(grid, dict) or any(k not in grid for k in need):
         raise StoreError(f"store {str(path)!r} lacks the root attribute 'grid' with keys {need}")
-    arr = group["seismic"]
+    arr = CheckedArray(group["seismic"], path, "seismic")
     n = arr.shape[0]
     if isinstance(sample, bool) or not isinstance(sample, (int, np.integer)) \
             or not 0 <= sample < n:
@@ -151,8 +147,8 @@ def read_section(store: str | Path, sample: int) -> tuple[np.ndarray, dict]:
         raise StoreError(f"seismic sample shape {section.shape} does not match the store grid "
                          f"(nz={grid['nz']}, nx={grid['nx']})")
     if not np.all(np.isfinite(section)):
-        raise StoreError(f"sample {sample} of {str(path)!r} was never written (its shard is "
-                         "missing or unfinished): it holds NaN")
+        raise StoreError(f"sample {sample} of array 'seismic' in {str(path)!r} was never "
+                         "written (its shard is missing or unfinished): it holds NaN")
     return section, dict(grid)
 
 
@@ -201,11 +197,11 @@ def store_summary(path: str | Path) -> list[str]:
             lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks "
                          f"{tuple(a.chunks)}  {spec.role}, {spec.units}: {spec.description}")
     lines.append("parameters (over done samples):")
-    for name, vals in read_params(root, int(n)).items():
-        vals = vals[done]
+    table = read_done_params(path)
+    for name, vals in table.values.items():
         if vals.size == 0:
             continue
-        names = root["params"][name].attrs.get("categories")
+        names = table.categories.get(name)
         if names:                        # names with their sample counts, e.g. imaging 1d (6), psf (6)
             codes_used, counts = np.unique(vals.astype(np.int64), return_counts=True)
             shown = ", ".join(f"{names[int(c)]} ({int(k)})" for c, k in zip(codes_used, counts))
@@ -217,10 +213,9 @@ def store_summary(path: str | Path) -> list[str]:
         else:
             shown = f"{_fmt(vals.min())} .. {_fmt(vals.max())} ({uniq.size} distinct)"
         lines.append(f"  {name:22s} {shown}")
-    params = read_params(root, int(n))
-    if "has_fault" in params and done.any():
-        none = int((params["has_fault"][done] == 0).sum())
-        lines.append(f"samples without a fault: {none} of {int(done.sum())} done "
+    if "has_fault" in table.values and table.samples.size:
+        none = int((table.values["has_fault"] == 0).sum())
+        lines.append(f"samples without a fault: {none} of {int(table.samples.size)} done "
                      f"(select faulted ones with where={{'has_fault': 1}})")
     if cfg:
         sw = cfg.get("sweep", {})

@@ -56,7 +56,7 @@ def record_failures(path: str | Path, failures: Mapping[int, str]) -> dict[str, 
     """
     group = open_store(path, "r+")
     n_shards = int(group["shard_done"].shape[0])
-    done = np.asarray(group["shard_done"][...])
+    done, _ = read_done_flags(path, n_shards, group["shard_done"])  # no read per pending shard
     merged = {int(k): str(v) for k, v in dict(group.attrs.get("failures", {})).items()}
     for k, text in failures.items():
         if not 0 <= int(k) < n_shards:

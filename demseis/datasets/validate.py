@@ -20,7 +20,14 @@ import numpy as np
 from tqdm import tqdm
 
 from demseis.datasets.integrity import read_done_flags, shard_damage
-from demseis.datasets.layout import SCHEMA_VERSION, fill_value_for, open_store, store_layout
+from demseis.datasets.layout import (
+    SCHEMA_VERSION,
+    check_store_metadata,
+    fill_value_for,
+    metadata_problems,
+    open_store,
+    store_layout,
+)
 from demseis.datasets.particles import particle_group_name, read_particles
 from demseis.errors import StoreError
 from demseis.schema import sample_array
@@ -143,6 +150,14 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
     StoreError
         The path is missing, foreign or of another schema version (the CLI exits 2).
     """
+    check_store_metadata(Path(path))  # the root: StoreError (exit 2) when unreadable
+    meta_problems = metadata_problems(path)
+    if meta_problems:  # the data cannot be checked against metadata that cannot be read
+        report = ValidationReport(path=str(path))
+        report.problems.extend(meta_problems)
+        report.problems.append("metadata damaged: `demseis generate` with the store's config "
+                               "rewrites it")
+        return report
     group = open_store(path, "r")  # read only: validate never writes, so it takes no lock
     attrs = dict(group.attrs)
     layout = store_layout(group)

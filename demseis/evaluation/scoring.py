@@ -840,6 +840,6 @@ def score_store(pred: Any, store: Any, *, indices: ArrayLike | None = None,
     counts, sample = score_store_counts(pred, truth, indices=indices, threshold=threshold,
                                         tolerance_px=tolerance_px, thresholds=thresholds,
                                         progress=progress)
-    params = {k: v[sample] for k, v in truth.params.items()}
+    params = truth.params.take(sample)  # without building (N,) columns of a huge store
     return StoreScore(overall=summarise(counts), rows=group_rows(counts, params, list(by), bins=bins),
                       sample_index=sample, params=params, counts=counts)

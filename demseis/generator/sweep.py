@@ -9,6 +9,7 @@ resumes where it stopped and gives the same bytes as an uninterrupted one.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import json
 import logging
 import os
@@ -35,6 +36,7 @@ from demseis.datasets import (
     write_shard,
     writer_lock,
 )
+from demseis.datasets.layout import root_metadata_lost
 from demseis.datasets.lock import pid_alive
 from demseis.errors import ConfigError, InputError, SimulationError, StoreError
 from demseis.generator.config import Config, load_config, parse_config
@@ -144,6 +146,8 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
     out = Path(out)
     attrs = store_attrs(cfg)
     if out.exists() and not overwrite:
+        if root_metadata_lost(out):  # its config is lost with it: the arrays must match
+            _create(cfg, out, attrs, overwrite=False)
         stored = read_store_attrs(out)  # raises StoreError for a foreign path
         old = json.loads(json.dumps(stored.get("config")))
         new = json.loads(json.dumps(attrs["config"]))
@@ -156,6 +160,7 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
         # a driver killed mid-write (kill -9) leaves zarr's temporary files; we hold the lock
         # and no task runs yet, so every one of them is stale
         remove_partial_writes(out)
+        _create(cfg, out, attrs, overwrite=False)  # rewrites damaged metadata, checks the layout
         return shard_status(out, verify=True)  # a damaged done shard is redone
     # A new store is built beside ``out`` and renamed into place, so a kill -9 while its
     # arrays are being created leaves no half-made store at ``out`` (found by the kill test).
@@ -164,16 +169,7 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
         _remove_orphan_creations(out)
         out = out.with_name(f".{out.name}.creating-{os.getpid()}")
     try:
-        create_store(
-            out,
-            n_shards=cfg.sweep.n_runs,
-            samples_per_shard=cfg.samples_per_run,
-            shape=sample_shape(cfg),
-            arrays=array_dtypes(cfg),
-            params=store_param_specs(),
-            attrs=attrs,
-            overwrite=overwrite,
-        )
+        _create(cfg, out, attrs, overwrite=overwrite)
     except OSError as exc:  # name the path the user gave, not the temporary one
         if out != target:
             shutil.rmtree(out, ignore_errors=True)
@@ -181,6 +177,14 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
     if out != target:
         os.rename(out, target)
     return shard_status(target)
+
+
+def _create(cfg: Config, out: Path, attrs: dict[str, Any], *, overwrite: bool) -> None:
+    """:func:`~demseis.datasets.create_store` of ``cfg`` at ``out``: a new store, or (an
+    existing one, without ``overwrite``) its damaged metadata rewritten and its layout checked."""
+    create_store(out, n_shards=cfg.sweep.n_runs, samples_per_shard=cfg.samples_per_run,
+                 shape=sample_shape(cfg), arrays=array_dtypes(cfg), params=store_param_specs(),
+                 attrs=attrs, overwrite=overwrite)
 
 
 def _remove_orphan_creations(out: Path) -> None:
@@ -402,16 +406,30 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
         # longest runs first (LPT): fewer workers idle at the end of a sweep of unequal runs
         cfg_dict = cfg.to_dict()
         order = sorted(pending, key=lambda s: -run_cost(cfg, s))
-        futures = [client.submit(shard_task, store, cfg_dict, s, retries=retries, pure=False,
-                                 priority=len(order) - rank, key=f"demseis-shard-{s}-{os.getpid()}")
-                   for rank, s in enumerate(order)]
-        shard_of = {f.key: s for f, s in zip(futures, order)}
-        for fut in as_completed(futures):
+        shard_of: dict[str, int] = {}
+
+        def submit(rank: int, s: int) -> Any:
+            fut = client.submit(shard_task, store, cfg_dict, s, retries=retries, pure=False,
+                                priority=len(order) - rank, key=f"demseis-shard-{s}-{os.getpid()}")
+            shard_of[fut.key] = s
+            return fut
+
+        # A bounded window of tasks in flight, refilled as they finish: submitting a 100,000-run
+        # sweep at once took tens of seconds, and so did cancelling it on Ctrl-C (24-34 s
+        # measured); with the window both cost what the few tasks in flight cost.
+        queue = iter(enumerate(order))
+        window = max(SUBMIT_WINDOW, 4 * len(client.scheduler_info().get("workers", {})))
+        running = as_completed([submit(rank, s) for rank, s in itertools.islice(queue, window)])
+        for fut in running:
             if fut.status == "finished":
                 _account(summary, bar, fut.result())
             else:
                 exc = fut.exception()
                 summary.failed[shard_of[fut.key]] = f"{type(exc).__name__}: {exc}"
+            shard_of.pop(fut.key, None)
+            nxt = next(queue, None)
+            if nxt is not None:
+                running.add(submit(*nxt))
         summary.compute_seconds = time.perf_counter() - t_compute
         summary.phase_seconds["compute"] = summary.compute_seconds
     except BaseException:
@@ -425,6 +443,10 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
             if cluster is not None:
                 cluster.close()
         summary.phase_seconds["close"] = time.perf_counter() - t_close
+
+
+#: tasks a sweep keeps submitted at least (4 per worker where there are more workers)
+SUBMIT_WINDOW = 64
 
 
 def _quiet_dask_logs() -> None:

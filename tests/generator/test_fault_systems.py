@@ -74,18 +74,19 @@ def test_samples_record_their_basement_faults():
 
 
 def test_fault_distribution_counts_runs(tmp_path):
-    import zarr
-
+    from demseis.datasets import create_store, write_shard
     from demseis.generator.faultinfo import fault_distribution
 
-    root = zarr.open_group(str(tmp_path / "s.zarr"), mode="w")
-    p = root.create_group("params")
-    # 3 runs of 2 samples; the third is not done (zeros)
+    # 3 runs of 2 samples; the third is not done (never written)
     cols = {"sample_in_run": [0, 1, 0, 1, 0, 1], "n_basement_faults": [2, 2, 1, 1, 0, 0],
             "structure": [2, 2, 4, 4, 0, 0],
             "fault0_kind": [0, 0, 2, 2, 0, 0], "fault1_kind": [0, 0, -1, -1, 0, 0]}
-    for name, v in cols.items():
-        p.create_array(name, data=np.array(v, np.int8))
+    path = tmp_path / "s.zarr"
+    create_store(path, n_shards=3, samples_per_shard=2, shape=(4, 4), arrays=["fault"],
+                 params={name: "int8" for name in cols})
+    for k in range(2):
+        write_shard(path, k, {"fault": np.zeros((2, 4, 4), np.uint8)},
+                    {name: np.array(v[2 * k: 2 * k + 2], np.int8) for name, v in cols.items()})
     lines = fault_distribution(tmp_path / "s.zarr")
     assert lines[0] == "basement faults over 2 runs:"
     assert "graben: 1" in lines[1] and "half_graben: 1" in lines[1] and "single" not in lines[1]
