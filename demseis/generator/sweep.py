@@ -43,6 +43,7 @@ from demseis.generator.layout import array_dtypes, grid_of, param_codes, param_d
 from demseis.generator.pipeline import run_shard
 from demseis.generator.sampling import run_params
 from demseis.generator.workers import (
+    main_module_hidden,
     set_worker_env,
     sigint_ignored,
     start_forkserver,
@@ -388,10 +389,14 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
     # _start_local_cluster) and the driver closes the cluster in the ``finally`` below, so an
     # interrupted sweep prints no worker traceback and leaks no semaphore.
     client = None
+    hidden = contextlib.ExitStack()
     try:
         if remote is not None:
             client = remote
         else:
+            # the caller's __main__ stays hidden while the cluster lives: dask restarts a
+            # crashed worker in a new process (demseis.generator.workers)
+            hidden.enter_context(main_module_hidden())
             client, cluster = _start_local_cluster(summary, workers, retries)
         summary.phase_seconds["start"] = time.perf_counter() - t_start
         t_compute = time.perf_counter()
@@ -420,6 +425,7 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
                 client.close()
             if cluster is not None:
                 cluster.close()
+            hidden.close()
         summary.phase_seconds["close"] = time.perf_counter() - t_close
 
 
