@@ -23,7 +23,7 @@ import numpy as np
 
 from demseis.datasets import FaultSegDataset, open_store, read_sample, store_layout, to_xarray
 from demseis.datasets.read import done_samples, read_params, store_summary
-from demseis.errors import InputError, StoreError
+from demseis.errors import InputError, StoreError, import_torch
 from demseis.generator.workers import start_forkserver
 
 
@@ -146,7 +146,13 @@ class Store:
 
         Keyword arguments go to :class:`~demseis.datasets.FaultSegDataset` (``inputs``,
         ``targets``, ``crop``, ``split``, ``where``, ``transform``, ``seed`` ...).
+
+        Raises
+        ------
+        MissingExtra
+            torch is not installed (``pip install "demseis[torch]"``).
         """
+        import_torch("Store.torch_dataset")  # fail here, not in the first batch
         return FaultSegDataset(self.path, **kwargs)
 
     def to_xarray(self) -> Any:

@@ -19,7 +19,7 @@ from numcodecs import blosc
 from demseis.datasets._shardio import RawShardReader, raw_shard_layout
 from demseis.datasets.layout import fill_value_for, open_store, store_layout
 from demseis.datasets.status import shard_status
-from demseis.errors import InputError, StoreError
+from demseis.errors import InputError, StoreError, import_torch
 
 SPLITS = ("train", "val", "test")
 
@@ -446,7 +446,7 @@ class FaultSegDataset:
         return out
 
     def _item(self, data: dict[str, list[np.ndarray]], m: int):
-        import torch
+        torch = import_torch("the PyTorch Dataset")
 
         if len(self.inputs) == 1:  # no stacking copy for the usual single input
             x = data[self.inputs[0]][m][None].astype(np.float32, copy=False)

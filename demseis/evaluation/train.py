@@ -26,14 +26,14 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from demseis.datasets import FaultSegDataset
-from demseis.errors import InputError
+from demseis.errors import InputError, import_torch
 from demseis.evaluation.scoring import score
 
 
 def build_unet(base: int = 16):
     """A 3-level 2D U-Net: (B, 1, H, W) seismic -> (B, 1, H, W) fault logits (H, W % 4 == 0)."""
-    import torch  # lazy: heavy (~2 s), see the module docstring
-    from torch import nn
+    torch = import_torch("the U-Net")  # lazy: heavy (~2 s), see the module docstring
+    nn = torch.nn
 
     def block(cin: int, cout: int) -> nn.Sequential:
         return nn.Sequential(
@@ -69,7 +69,7 @@ def build_unet(base: int = 16):
 def predict_sections(model, sections: np.ndarray, batch: int = 4,
                      device: str | None = None) -> np.ndarray:
     """Fault probabilities (N, H, W) float32 of seismic sections (N, H, W), padded to % 4."""
-    import torch  # lazy: heavy (~2 s), see the module docstring
+    torch = import_torch("prediction")  # lazy: heavy (~2 s), see the module docstring
 
     sections = np.asarray(sections)
     if sections.ndim != 3:
@@ -128,7 +128,7 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     (model, info) with info keys steps, epochs, seconds, final_loss, pos_weight, n_samples,
     n_runs, device.
     """
-    import torch  # lazy: heavy (~2 s), see the module docstring
+    torch = import_torch("training")  # lazy: heavy (~2 s), see the module docstring
     from torch.utils.data import DataLoader
 
     if (steps is None) == (minutes is None):
@@ -285,7 +285,7 @@ class _Mixed:
 
 def _augment(x: Any, y: Any, gen: Any) -> tuple[Any, Any]:
     """Per-crop left-right flip, polarity flip and amplitude scaling (x 0.5 .. 2)."""
-    import torch  # lazy: heavy (~2 s), see the module docstring
+    torch = import_torch("training")  # lazy: heavy (~2 s), see the module docstring
 
     n = x.shape[0]
     flip = torch.rand(n, generator=gen) < 0.5
