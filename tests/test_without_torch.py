@@ -64,3 +64,17 @@ def test_what_needs_torch_names_the_extra(no_torch):
     assert res.returncode == 0, res.stderr[-2000:]
     line = res.stdout.strip()
     assert line.startswith("ERR Store.torch_dataset needs PyTorch") and "demseis[torch]" in line
+
+
+@pytest.mark.parametrize("args", [["train", "t.zarr", "--out", "m.pt"],
+                                  ["predict", "m.pt", "in.npy", "--out", "out.npy"]])
+def test_train_and_predict_name_the_extra(no_torch, args):
+    run, d = no_torch
+    import numpy as np
+
+    np.save(d / "in.npy", np.zeros((8, 8), np.float32))
+    (d / "m.pt").write_bytes(b"not a model")
+    res = run(*args)
+    assert res.returncode == 2, res.stderr
+    assert res.stderr.count("\n") == 1 and "needs PyTorch" in res.stderr
+    assert 'pip install "demseis[torch]"' in res.stderr
