@@ -19,6 +19,8 @@ generator and the scoring code (``demseis.open`` needs neither)::
 
 from __future__ import annotations
 
+import os
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -185,6 +187,19 @@ def _resolve_config(config: Any) -> Any:
                      "path, a dict or a demseis.generator.config.Config")
 
 
+class WorkersWarning(UserWarning):
+    """More dask workers were asked for than this machine has cores."""
+
+
+def workers_warning(workers: int | None) -> str | None:
+    """``"workers N exceeds ..."`` when ``workers`` is more than this machine's cores, else None."""
+    cores = os.cpu_count() or 1
+    if workers is None or workers <= cores:
+        return None
+    return (f"workers {workers} exceeds the {cores} cores of this machine: the extra workers "
+            "share cores with the others and only add start-up time and memory")
+
+
 def generate(config: Any = None, *, out: str | Path, workers: int | None = None,
              overwrite: bool = False, scheduler: str | None = None,
              progress: bool = False) -> Store:
@@ -213,6 +228,9 @@ def generate(config: Any = None, *, out: str | Path, workers: int | None = None,
     cfg = _resolve_config(config)
     if workers is not None and scheduler is not None:
         raise InputError("give either workers or scheduler, not both")
+    warning = workers_warning(workers) if scheduler is None else None
+    if warning:
+        warnings.warn(warning, WorkersWarning, stacklevel=2)
     if scheduler is None and workers != 0:
         # its preload (imports, Numba kernels) runs while this process imports the sweep,
         # prepares the store and starts the scheduler (demseis.generator.workers)

@@ -45,7 +45,20 @@ def build_parser() -> argparse.ArgumentParser:
     bench_parser.set_defaults(func=lambda args: _missing_sub(bench_parser))
     for module in (generate, store, plots, evaluate, model, bench_cli):
         module.register(sub, bench)
+    _describe(sub)
     return parser
+
+
+def _describe(sub: argparse._SubParsersAction) -> None:
+    """Give every command (and bench target) without a description its one-line help as one,
+    so that ``demseis COMMAND --help`` says what the command does."""
+    for choice in sub._choices_actions:
+        parser = sub.choices[choice.dest]
+        if not parser.description and choice.help:
+            parser.description = choice.help[0].upper() + choice.help[1:] + "."
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                _describe(action)
 
 
 def _missing_sub(parser: argparse.ArgumentParser) -> int:

@@ -28,7 +28,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     )
     p.add_argument("predictions", help="predictions: .npy file or Zarr array of shape (N, H, W), "
                    "or a .sgy/.segy section (N = 1)")
-    p.add_argument("truth_store", help="demseis Zarr store with 'fault' labels")
+    p.add_argument("truth_store", metavar="STORE", help="demseis Zarr store with 'fault' labels")
     p.add_argument("--tolerance", type=float, default=0.0, metavar="PX",
                    help="matching distance in pixels (default 0: exact overlap)")
     p.add_argument("--threshold", type=float, default=0.5,
@@ -59,7 +59,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
         "demseis layers are deposited flat) or 'semblance' (dip-scanned semblance). Call a "
         "fault at probability >= 0.5 (the default threshold of 'demseis score').",
     )
-    b.add_argument("store", help="demseis Zarr store with a 'seismic' array")
+    b.add_argument("store", metavar="STORE", help="demseis Zarr store with a 'seismic' array")
     b.add_argument("--out", required=True, metavar="PRED",
                    help="output: PATH.npy for a NumPy file, anything else for a Zarr array")
     b.add_argument("--input", default="seismic", help="input array of the store (default seismic)")

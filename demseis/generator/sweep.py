@@ -250,6 +250,16 @@ def run_cost(cfg: Config, run: int) -> float:
     return get_engine(cfg.model.engine).cost(cfg, run_params(cfg, run))
 
 
+def human_bytes(n: float) -> str:
+    """``n`` bytes in the largest binary unit that keeps the number >= 1: ``"69.0 TiB"``."""
+    units = ("bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB")
+    k = 0
+    while n >= 1024 and k < len(units) - 1:
+        n /= 1024
+        k += 1
+    return f"{n:,.0f} {units[k]}" if k == 0 else f"{n:,.1f} {units[k]}"
+
+
 def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
     """Human lines describing the sweep without computing it."""
     grid = grid_of(cfg)
@@ -266,7 +276,7 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
         f"{cfg.renders_per_run_snapshot} renders per run)",
         f"sample shape: {h} x {w} ({cfg.output.domain} domain; {grid.cell_m:g} m cells); arrays: "
         + ", ".join(f"{k} {v}" for k, v in array_dtypes(cfg).items()),
-        f"size on disk: at most {n_runs * S * bytes_per_sample / 2**20:,.1f} MiB (uncompressed)"
+        f"size on disk: at most {human_bytes(n_runs * S * bytes_per_sample)} (uncompressed)"
         + (" plus particle snapshots" if engine.particles else ""),
         f"estimated time: up to ~{secs * n_runs / 60:,.1f} core-minutes "
         f"(~{secs:,.0f} s per run on one core at most; divide by the worker count for wall time)",
