@@ -340,7 +340,10 @@ def _run_sweep(
                 summary.compute_seconds = time.perf_counter() - t_compute
                 summary.phase_seconds["compute"] = summary.compute_seconds
             else:
-                _run_distributed(str(out), cfg, pending, summary, bar, workers, remote, retries)
+                # absolute: a worker's working directory is its forkserver's, which may differ
+                # from this process's (a notebook that changed directory since)
+                _run_distributed(str(out.absolute()), cfg, pending, summary, bar, workers, remote,
+                                 retries)
     finally:
         bar.close()
         if remote is not None and not pending:

@@ -11,7 +11,7 @@ takes ~0.03 s instead of ~0.5 s.
 :func:`demseis.api.generate` starts the server before it imports the rest of the sweep, so that
 the server's preload (~1.5 s of CPU) runs on another core while the driver imports, prepares
 the store and starts the scheduler. Measured with ``python benchmarks/sweep.py --methods
-forkserver,spawn`` (README, "Measured performance").
+forkserver,spawn``.
 
 ``DEMSEIS_WORKER_START=spawn`` (or ``forkserver``) forces a method.
 

@@ -83,3 +83,20 @@ def test_main_module_hidden_restores_the_main_module(monkeypatch):
         data = spawn.get_preparation_data("x")
         assert "main_path" not in data and "init_main_from_name" not in data
     assert fake.__file__ == "/somewhere/script.py" and fake.__spec__ is spec
+
+
+def test_relative_out_after_a_change_of_directory(tmp_path):
+    """The forkserver keeps the directory it started in; a relative --out still lands in the
+    caller's current directory (a notebook that called os.chdir)."""
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    code = ("import os, tomllib, demseis\n"
+            f"cfg = tomllib.load(open({TINY!r}, 'rb'))\n"
+            "cfg['model']['engine'] = 'kinematic'\n"
+            "demseis.generate(cfg, out='first.zarr')\n"
+            "os.chdir('../b')\n"
+            "s = demseis.generate(cfg, out='second.zarr')\n"
+            "assert s.done.all(), s\n"
+            "print('SCRIPT-START SCRIPT-DONE 12')\n")
+    _check(_run(["-c", code], tmp_path / "a"))
+    assert (tmp_path / "b" / "second.zarr").is_dir() and not (tmp_path / "a" / "second.zarr").exists()
