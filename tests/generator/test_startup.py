@@ -44,7 +44,7 @@ def _run(args: list[str], cwd, stdin: str | None = None, method: str | None = No
 def _check(res) -> None:
     assert res.returncode == 0, res.stderr[-3000:]
     assert res.stdout.count("SCRIPT-START") == 1, res.stdout  # the script ran once, not per worker
-    assert "SCRIPT-DONE 12" in res.stdout
+    assert "SCRIPT-DONE 18" in res.stdout
     assert "bootstrapping" not in res.stderr and "Traceback" not in res.stderr, res.stderr[-3000:]
 
 
@@ -97,6 +97,6 @@ def test_relative_out_after_a_change_of_directory(tmp_path):
             "os.chdir('../b')\n"
             "s = demseis.generate(cfg, out='second.zarr')\n"
             "assert s.done.all(), s\n"
-            "print('SCRIPT-START SCRIPT-DONE 12')\n")
+            "print('SCRIPT-START SCRIPT-DONE 18')\n")
     _check(_run(["-c", code], tmp_path / "a"))
     assert (tmp_path / "b" / "second.zarr").is_dir() and not (tmp_path / "a" / "second.zarr").exists()
