@@ -3,7 +3,7 @@
 SHA-256 of every file of the store (path and content, in sorted order; the writer lock and
 other hidden files left out), the whole store's and each top-level array's, with the library
 versions and the CPU model: the same config and seed give the same digest on any x86-64 CPU
-with the same library versions (README, "Across machines").
+with the same library versions (docs/guide.md, "Across machines").
 
     python benchmarks/store_digest.py STORE
 """

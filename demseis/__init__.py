@@ -6,6 +6,8 @@ The front door (:mod:`demseis.api`)::
     store = demseis.generate("tiny", out="t.zarr")   # run a sweep -> demseis.Store
     store = demseis.open("t.zarr")                   # samples, params, torch_dataset(), to_xarray()
     result = demseis.score(pred, store)              # precision / recall / F1 / IoU / AP
+    demseis.train(store, out="model.pt")             # a U-Net (needs demseis[torch])
+    demseis.predict("model.pt", "in.sgy", out="out.sgy")  # fault probability of any section
 
 Importing :mod:`demseis` is light: it does not import torch, dask, matplotlib or even NumPy;
 the names above load on first use. Subpackages, in data-flow order:
@@ -32,12 +34,12 @@ from demseis.errors import DemseisError
 
 __version__ = "0.1.0"
 
-__all__ = ["DemseisError", "Store", "__version__", "generate", "open", "score"]
+__all__ = ["DemseisError", "Store", "__version__", "generate", "open", "predict", "score", "train"]
 
-_API = ("Store", "generate", "open", "score")
+_API = ("Store", "generate", "open", "predict", "score", "train")
 
 if TYPE_CHECKING:  # pragma: no cover
-    from demseis.api import Store, generate, open, score  # noqa: A004
+    from demseis.api import Store, generate, open, predict, score, train  # noqa: A004
 
 
 def __getattr__(name: str) -> Any:

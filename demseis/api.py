@@ -1,4 +1,5 @@
-"""The Python front door: :func:`generate`, :func:`open`, :func:`score` and :class:`Store`.
+"""The Python front door: :func:`generate`, :func:`open`, :func:`score`, :func:`train`,
+:func:`predict` and :class:`Store`.
 
 Re-exported lazily by :mod:`demseis` (``demseis.generate`` ...), so ``import demseis`` stays
 light; dask, torch and xarray are imported only by the calls that need them, and so are the
@@ -12,10 +13,14 @@ generator and the scoring code (``demseis.open`` needs neither)::
     ds = store.torch_dataset(crop=128, split="train")   # a torch Dataset (FaultSegDataset)
     xr = store.to_xarray()                              # an xarray.Dataset (needs xarray)
     result = demseis.score(pred, store, by=("freq_hz",))
+    metrics = demseis.train(store, out="model.pt", steps=300)   # needs demseis[torch]
+    demseis.predict("model.pt", "line.sgy", out="faults.sgy")   # SEG-Y in, probability out
 """
 
 from __future__ import annotations
 
+import os
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -24,7 +29,7 @@ import numpy as np
 
 from demseis.datasets import FaultSegDataset, open_store, read_sample, store_layout, to_xarray
 from demseis.datasets.read import done_samples, read_params, store_summary
-from demseis.errors import InputError, StoreError
+from demseis.errors import InputError, StoreError, import_torch
 from demseis.generator.workers import start_forkserver
 
 
@@ -133,7 +138,13 @@ class Store:
 
         Keyword arguments go to :class:`~demseis.datasets.FaultSegDataset` (``inputs``,
         ``targets``, ``crop``, ``split``, ``where``, ``transform``, ``seed`` ...).
+
+        Raises
+        ------
+        MissingExtra
+            torch is not installed (``pip install "demseis[torch]"``).
         """
+        import_torch("Store.torch_dataset")  # fail here, not in the first batch
         return FaultSegDataset(self.path, **kwargs)
 
     def to_xarray(self) -> Any:
@@ -161,6 +172,19 @@ def _resolve_config(config: Any) -> Any:
         return load_config(config)
     raise InputError(f"config {config!r}: give a preset name ({', '.join(PRESETS)}), a TOML "
                      "path, a dict or a demseis.generator.config.Config")
+
+
+class WorkersWarning(UserWarning):
+    """More dask workers were asked for than this machine has cores."""
+
+
+def workers_warning(workers: int | None) -> str | None:
+    """``"workers N exceeds ..."`` when ``workers`` is more than this machine's cores, else None."""
+    cores = os.cpu_count() or 1
+    if workers is None or workers <= cores:
+        return None
+    return (f"workers {workers} exceeds the {cores} cores of this machine: the extra workers "
+            "share cores with the others and only add start-up time and memory")
 
 
 def generate(config: Any = None, *, out: str | Path, workers: int | None = None,
@@ -191,6 +215,9 @@ def generate(config: Any = None, *, out: str | Path, workers: int | None = None,
     cfg = _resolve_config(config)
     if workers is not None and scheduler is not None:
         raise InputError("give either workers or scheduler, not both")
+    warning = workers_warning(workers) if scheduler is None else None
+    if warning:
+        warnings.warn(warning, WorkersWarning, stacklevel=2)
     if scheduler is None and workers != 0:
         # its preload (imports, Numba kernels) runs while this process imports the sweep,
         # prepares the store and starts the scheduler (demseis.generator.workers)
@@ -231,4 +258,55 @@ def score(pred: Any, store: Store | str | Path, **kwargs: Any) -> Any:
     return score_store(pred, store, **kwargs)
 
 
-__all__ = ["Store", "generate", "open", "score"]
+def train(store: Store | str | Path, out: str | Path = "model.pt", **kwargs: Any) -> dict[str, Any]:
+    """Train the fault-segmentation U-Net on a store; write ``out``, ``out.json``, ``out.ckpt``.
+
+    Whole runs are held out: the model kept is the best on the validation runs, and the
+    returned metrics (precision, recall, F1, IoU, AP at a 2-pixel tolerance) are those of the
+    test runs. Needs torch (``pip install "demseis[torch]"``) and a store of at least 3 runs.
+
+    Parameters
+    ----------
+    store : a :class:`Store` or its path.
+    out : the model file.
+    **kwargs : ``steps`` (300), ``crop``, ``batch``, ``base``, ``lr``, ``seed``, ``device``,
+        ``val_every``, ``save_every``, ``resume``, ``threads``, ``progress``, ``log``
+        (:func:`demseis.evaluation.model.train_model`).
+    """
+    from demseis.evaluation.model import train_model  # lazy: torch
+
+    return train_model(str(getattr(store, "path", store)), out, **kwargs)
+
+
+def predict(model: Any, source: Any, out: str | Path | None = None, *,
+            device: str | None = None, overwrite: bool = False) -> Any:
+    """Fault probability of seismic sections with a model from :func:`train`.
+
+    Parameters
+    ----------
+    model : the model file (``model.pt``) or a model loaded by
+        :func:`demseis.evaluation.model.load_model`.
+    source : a SEG-Y file (``.sgy``, ``.segy``), a ``.npy`` file, or an array (H, W) or
+        (N, H, W) of any size.
+    out : where to write (``.sgy`` with the input's headers, or ``.npy``); None returns the
+        probabilities as an array of the input's shape (a SEG-Y section as (samples, traces)).
+    device : ``"cpu"``, ``"cuda"`` ... (default: CUDA when available).
+    overwrite : replace an existing ``out``.
+
+    Returns
+    -------
+    Path of ``out``, or the probability array when ``out`` is None.
+    """
+    from demseis.evaluation import model as m  # lazy: torch
+
+    if out is not None:  # the paths are checked before the model is loaded
+        return m.predict_file(model, source, out, device=device, overwrite=overwrite)
+    net = m.load_model(model, device) if isinstance(model, (str, Path)) else model
+    if isinstance(source, (str, Path)):
+        data = m.read_segy_section(source) if m.is_segy(source) else np.load(source)
+    else:
+        data = np.asarray(source)
+    return m.predict_array(net, data)
+
+
+__all__ = ["Store", "generate", "open", "predict", "score", "train"]

@@ -4,6 +4,7 @@
 - :mod:`demseis.cli.store`: ``info``, ``validate``, ``export-segy``
 - :mod:`demseis.cli.plots`: ``plot``, ``preview``
 - :mod:`demseis.cli.evaluate`: ``score``, ``baseline``
+- :mod:`demseis.cli.model`: ``train``, ``predict``
 - :mod:`demseis.cli.bench`: ``bench dem|seismic|labels|loader``
 
 Each module has ``register(sub, bench)``, where ``sub`` is the top-level subparsers object and
@@ -35,7 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The full argument parser with every subpackage's subcommands registered."""
     # imported here so that main() also turns a Ctrl-C during these imports into its message
     from demseis.cli import bench as bench_cli
-    from demseis.cli import evaluate, generate, plots, store
+    from demseis.cli import evaluate, generate, model, plots, store
 
     parser = argparse.ArgumentParser(
         prog="demseis",
@@ -46,9 +47,22 @@ def build_parser() -> argparse.ArgumentParser:
     bench_parser = sub.add_parser("bench", help="speed benchmarks printing one JSON line")
     bench = bench_parser.add_subparsers(dest="bench_target", metavar="TARGET")
     bench_parser.set_defaults(func=lambda args: _missing_sub(bench_parser))
-    for module in (generate, store, plots, evaluate, bench_cli):
+    for module in (generate, store, plots, evaluate, model, bench_cli):
         module.register(sub, bench)
+    _describe(sub)
     return parser
+
+
+def _describe(sub: argparse._SubParsersAction) -> None:
+    """Give every command (and bench target) without a description its one-line help as one,
+    so that ``demseis COMMAND --help`` says what the command does."""
+    for choice in sub._choices_actions:
+        parser = sub.choices[choice.dest]
+        if not parser.description and choice.help:
+            parser.description = choice.help[0].upper() + choice.help[1:] + "."
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                _describe(action)
 
 
 def _missing_sub(parser: argparse.ArgumentParser) -> int:

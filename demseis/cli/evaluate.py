@@ -21,13 +21,14 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p = sub.add_parser(
         "score",
         help="precision / recall / F1 / IoU of fault predictions against a store's labels",
-        description="Score fault predictions (a .npy file or Zarr array of shape (N, H, W), "
-        "probabilities in [0, 1]) against the 'fault' labels of a demseis store. Prints a "
+        description="Score fault predictions (a .npy file or Zarr array of shape (N, H, W), or "
+        "a SEG-Y section from 'demseis predict', probabilities in [0, 1]) against the 'fault' labels of a demseis store. Prints a "
         "table and writes <prefix>.csv and <prefix>.json (and <prefix>.samples.csv with "
         "--per-sample).",
     )
-    p.add_argument("predictions", help="predictions: .npy file or Zarr array, shape (N, H, W)")
-    p.add_argument("truth_store", help="demseis Zarr store with 'fault' labels")
+    p.add_argument("predictions", help="predictions: .npy file or Zarr array of shape (N, H, W), "
+                   "or a .sgy/.segy section (N = 1)")
+    p.add_argument("truth_store", metavar="STORE", help="demseis Zarr store with 'fault' labels")
     p.add_argument("--tolerance", type=float, default=0.0, metavar="PX",
                    help="matching distance in pixels (default 0: exact overlap)")
     p.add_argument("--threshold", type=float, default=0.5,
@@ -38,8 +39,8 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.add_argument("--bins", type=int, default=4,
                    help="bins for parameters with more than 12 distinct values (default 4)")
     p.add_argument("--indices", default=None, metavar="PATH",
-                   help=".npy/.txt file with the store sample index of each prediction row "
-                   "(default: row i is sample i and predictions cover the whole store)")
+                   help=".npy/.txt file with the store sample index of each prediction row, "
+                   "or the indices themselves, e.g. 7 or 3,4,5 (default: row i is sample i and predictions cover the whole store)")
     p.add_argument("--thresholds", type=int, default=99,
                    help="number of thresholds of the ODS/OIS/AP sweep (default 99)")
     p.add_argument("--out-prefix", default=None,
@@ -58,7 +59,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
         "demseis layers are deposited flat) or 'semblance' (dip-scanned semblance). Call a "
         "fault at probability >= 0.5 (the default threshold of 'demseis score').",
     )
-    b.add_argument("store", help="demseis Zarr store with a 'seismic' array")
+    b.add_argument("store", metavar="STORE", help="demseis Zarr store with a 'seismic' array")
     b.add_argument("--out", required=True, metavar="PRED",
                    help="output: PATH.npy for a NumPy file, anything else for a Zarr array")
     b.add_argument("--input", default="seismic", help="input array of the store (default seismic)")
@@ -78,7 +79,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
 def _default_prefix(pred_path: str) -> str:
     base = pred_path.rstrip("/\\")
-    for ext in (".npy", ".zarr"):
+    for ext in (".npy", ".zarr", ".sgy", ".segy"):
         if base.endswith(ext):
             base = base[: -len(ext)]
     return base + ".score"
@@ -87,6 +88,8 @@ def _default_prefix(pred_path: str) -> str:
 def _load_indices(path: str) -> np.ndarray:
     import numpy as np  # lazy: see the note above register()
 
+    if all(part.strip().isdigit() for part in path.split(",")) and not os.path.exists(path):
+        return np.asarray([int(part) for part in path.split(",")], dtype=np.int64)
     if not os.path.exists(path):
         raise InputError(f"--indices: file {path!r} does not exist")
     try:

@@ -4,7 +4,10 @@ relabel a store's snapshots, list the parameters a config may set."""
 from __future__ import annotations
 
 import argparse
+import re
+import sys
 import tomllib
+import warnings
 
 from demseis.cli._args import nonneg_int
 from demseis.errors import ConfigError, InputError
@@ -34,7 +37,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.set_defaults(func=cmd_generate)
 
     p = sub.add_parser("render", help="re-render a store's particle snapshots at new frequencies / SNRs")
-    p.add_argument("store", help="source store (its DEM snapshots are reused)")
+    p.add_argument("store", metavar="STORE", help="source store (its DEM snapshots are reused)")
     p.add_argument("--freq", required=True, help="comma-separated Ricker frequencies in Hz, e.g. 20,40,60")
     p.add_argument("--snr", default="inf", help="comma-separated SNRs in dB (inf = no noise), default inf")
     p.add_argument("--noise", default="white", choices=("white", "band"), help="noise kind")
@@ -50,7 +53,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("relabel", help="new labels for a store's particle snapshots (same seismic)")
-    p.add_argument("store", help="source store (its DEM snapshots are reused)")
+    p.add_argument("store", metavar="STORE", help="source store (its DEM snapshots are reused)")
     p.add_argument("--labels", required=True,
                    help="TOML file with a [labels] table (keys not given take their defaults)")
     p.add_argument("--out", required=True, help="new store path")
@@ -67,7 +70,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
-    from demseis.api import generate
+    from demseis.api import WorkersWarning, generate, workers_warning
     from demseis.generator.config import load_config
     from demseis.generator.sweep import dry_run_plan
 
@@ -77,8 +80,13 @@ def cmd_generate(args: argparse.Namespace) -> int:
         return 0
     if args.workers is not None and args.scheduler is not None:
         raise InputError("give either --workers or --scheduler, not both")
-    store = generate(cfg, out=args.out, workers=args.workers, scheduler=args.scheduler,
-                     overwrite=args.overwrite, progress=not args.quiet)
+    warning = workers_warning(args.workers)
+    if warning:
+        print(f"demseis: warning: --{warning}", file=sys.stderr)
+    with warnings.catch_warnings():  # printed above, once
+        warnings.simplefilter("ignore", WorkersWarning)
+        store = generate(cfg, out=args.out, workers=args.workers, scheduler=args.scheduler,
+                         overwrite=args.overwrite, progress=not args.quiet)
     print("\n".join(store.run_summary.lines()))
     return 1 if store.run_summary.failed else 0
 
@@ -119,11 +127,30 @@ def cmd_render(args: argparse.Namespace) -> int:
         if len(vals) != 1:
             raise InputError(f"--psf-aperture {args.psf_aperture!r}: give one value in m")
         aperture = vals[0]
-    summary = rerender(args.store, args.out, freqs_hz=freqs, snrs_db=snrs, noise_kind=args.noise,
-                       imaging=imaging, psf_max_angles_deg=angles, psf_aperture_m=aperture,
-                       overwrite=args.overwrite, progress=not args.quiet)
+    try:
+        summary = rerender(args.store, args.out, freqs_hz=freqs, snrs_db=snrs,
+                           noise_kind=args.noise, imaging=imaging, psf_max_angles_deg=angles,
+                           psf_aperture_m=aperture, overwrite=args.overwrite,
+                           progress=not args.quiet)
+    except ConfigError as exc:
+        raise ConfigError(_flag_message(str(exc))) from None
     print("\n".join(summary.lines()))
     return 1 if summary.failed else 0
+
+
+#: the config key each ``demseis render`` flag sets, so that an error names the flag typed
+RENDER_FLAGS = {"freq_hz": "--freq", "snr_db": "--snr", "noise_kind": "--noise",
+                "imaging": "--imaging", "psf_max_angle_deg": "--psf-max-angle",
+                "psf_aperture_m": "--psf-aperture"}
+
+
+def _flag_message(message: str) -> str:
+    """A config error about a key that a ``render`` flag set, reworded to name the flag:
+    ``sweep.freq_hz[0] = 0.0 is not allowed: ...`` -> ``--freq 0.0 is not allowed: ...``."""
+    m = re.match(r"sweep\.(\w+)(?:\[\d+\])? = ", message)
+    if m is None or m.group(1) not in RENDER_FLAGS:
+        return message
+    return f"{RENDER_FLAGS[m.group(1)]} {message[m.end():]}"
 
 
 def cmd_relabel(args: argparse.Namespace) -> int:

@@ -13,13 +13,13 @@ from demseis.cli._args import nonneg_int
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``preview`` and ``plot``."""
     p = sub.add_parser("preview", help="PNG figures of one run (like the paper's Figures 2-6)")
-    p.add_argument("source", help="a TOML config, a preset name, or a store")
+    p.add_argument("source", metavar="SOURCE", help="a TOML config, a preset name, or a store")
     p.add_argument("--out", required=True, help="output directory for the PNG files")
     p.add_argument("--run", type=nonneg_int, default=0, help="run index (default 0)")
     p.set_defaults(func=cmd_preview)
 
     p = sub.add_parser("plot", help="PNG of one stored sample: section, fault label, damage zone")
-    p.add_argument("store", help="store path")
+    p.add_argument("store", metavar="STORE", help="store path")
     p.add_argument("--sample", type=nonneg_int, default=0, help="sample index (default 0)")
     p.add_argument("--out", required=True, help="output PNG path")
     p.set_defaults(func=cmd_plot)

@@ -16,7 +16,7 @@ import sys
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``info``, ``validate`` and ``export-segy``."""
     p = sub.add_parser("info", help="summarise a store: samples, shapes, parameter ranges, config")
-    p.add_argument("path", help="store path")
+    p.add_argument("path", metavar="STORE", help="store path")
     p.set_defaults(func=cmd_info)
 
     p = sub.add_parser(
@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
         "parameters. Read only: it takes no lock. Exit 0 when fine, 1 with the list of "
         "problems, 2 for a missing or foreign store.",
     )
-    p.add_argument("path", metavar="PATH", help="store directory")
+    p.add_argument("path", metavar="STORE", help="store directory")
     p.add_argument("--no-particles", action="store_true",
                    help="skip reading the stored particle snapshots")
     p.set_defaults(func=cmd_validate)
@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
         description="Write seismic sample I of a demseis store as a SEG-Y file (one trace per "
                     "grid column, IEEE float32, sample interval and trace x set).",
     )
-    p.add_argument("store", help="path of the demseis Zarr store")
+    p.add_argument("store", metavar="STORE", help="path of the demseis Zarr store")
     p.add_argument("--sample", type=int, required=True, metavar="I", help="sample index")
     p.add_argument("--out", required=True, metavar="FILE.sgy", help="SEG-Y file to write")
     p.add_argument("--overwrite", action="store_true", help="replace FILE.sgy if it exists")

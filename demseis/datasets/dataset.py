@@ -21,7 +21,7 @@ from demseis.datasets.layout import fill_value_for, open_store, store_layout
 from demseis.datasets.status import shard_status
 from demseis.datasets.checked import CheckedArray
 from demseis.datasets.table import FullParams, read_done_params, shard_params
-from demseis.errors import InputError, StoreError
+from demseis.errors import InputError, StoreError, import_torch
 
 SPLITS = ("train", "val", "test")
 
@@ -444,7 +444,7 @@ class FaultSegDataset:
         return out
 
     def _item(self, data: dict[str, list[np.ndarray]], m: int):
-        import torch
+        torch = import_torch("the PyTorch Dataset")
 
         if len(self.inputs) == 1:  # no stacking copy for the usual single input
             x = data[self.inputs[0]][m][None].astype(np.float32, copy=False)

@@ -46,7 +46,7 @@ from demseis.dem.assembly import Pack, settle_pack
 from demseis.dem.engine import Engine
 from demseis.dem.types import Material
 from demseis.diagnostics.toys import disk_pack, faulted_sequence, kinematic_fault
-from demseis.errors import InputError
+from demseis.errors import InputError, import_torch
 from demseis.labels import LabelConfig, displacement_history, label_maps, strain_history
 from demseis.seismic.forward import synthetic_sections
 from demseis.seismic.properties import (
@@ -392,7 +392,7 @@ def loader_benchmark(
     progress: bool = False,
 ) -> dict:
     """Build the data, time both loaders, return the result dict (one JSON line's worth)."""
-    import torch  # heavy: only this benchmark needs it
+    torch = import_torch("demseis bench loader")  # heavy: only this benchmark needs it
     from torch.utils.data import DataLoader, RandomSampler
 
     torch.set_num_threads(1)

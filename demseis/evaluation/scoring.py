@@ -61,6 +61,7 @@ from tqdm import tqdm
 
 from demseis.datasets.read import open_truth
 from demseis.errors import InputError, StoreError
+from demseis.evaluation.segyfile import is_segy, read_segy_section
 
 if TYPE_CHECKING:
     from demseis.datasets.read import TruthStore
@@ -484,13 +485,17 @@ MAX_CATEGORIES = 12
 
 
 def load_predictions(path: str) -> Any:
-    """Open predictions of shape (N, H, W): a ``.npy`` file (memory-mapped) or a Zarr array.
+    """Open predictions of shape (N, H, W): a ``.npy`` file (memory-mapped), a Zarr array, or a
+    SEG-Y file (``.sgy`` / ``.segy``, one section: N = 1, a trace per column, as ``demseis
+    predict`` writes it).
 
     A Zarr group is accepted when it holds one array, or an array named ``pred``.
     """
     if not os.path.exists(path):
         raise InputError(f"predictions {path!r} do not exist")
-    if str(path).endswith(".npy"):
+    if is_segy(path):
+        arr = read_segy_section(path)[None]
+    elif str(path).endswith(".npy"):
         try:
             arr = np.load(path, mmap_mode="r", allow_pickle=False)
         except Exception as exc:

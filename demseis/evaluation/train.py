@@ -26,14 +26,14 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from demseis.datasets import FaultSegDataset
-from demseis.errors import InputError
+from demseis.errors import InputError, import_torch
 from demseis.evaluation.scoring import score
 
 
 def build_unet(base: int = 16):
     """A 3-level 2D U-Net: (B, 1, H, W) seismic -> (B, 1, H, W) fault logits (H, W % 4 == 0)."""
-    import torch  # lazy: heavy (~2 s), see the module docstring
-    from torch import nn
+    torch = import_torch("the U-Net")  # lazy: heavy (~2 s), see the module docstring
+    nn = torch.nn
 
     def block(cin: int, cout: int) -> nn.Sequential:
         return nn.Sequential(
@@ -69,7 +69,7 @@ def build_unet(base: int = 16):
 def predict_sections(model, sections: np.ndarray, batch: int = 4,
                      device: str | None = None) -> np.ndarray:
     """Fault probabilities (N, H, W) float32 of seismic sections (N, H, W), padded to % 4."""
-    import torch  # lazy: heavy (~2 s), see the module docstring
+    torch = import_torch("prediction")  # lazy: heavy (~2 s), see the module docstring
 
     sections = np.asarray(sections)
     if sections.ndim != 3:
@@ -95,7 +95,9 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
                log: Callable[[str], None] | None = print, augment: bool = False,
                amp: bool | None = None, val_every: int | None = None, patience: int = 5,
                checkpoint: str | None = None,
-               progress: bool = False) -> tuple[Any, dict[str, Any]]:
+               progress: bool = False, resume: Mapping[str, Any] | None = None,
+               save_every: int | None = None,
+               save: Callable[[dict[str, Any]], None] | None = None) -> tuple[Any, dict[str, Any]]:
     """Train :func:`build_unet` on random crops of a store's ``split``.
 
     Parameters
@@ -112,6 +114,10 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         and stop after ``patience`` evaluations without improvement. The returned model is the
         best one. None: no validation.
     progress : a progress bar on stderr (tqdm).
+    resume : a state from ``save`` (:func:`training_state`): training goes on from its step
+        with its weights, optimiser, positive weight and best validation model.
+    save_every, save : every ``save_every`` steps and at the end, ``save`` is called with the
+        training state (weights, optimiser, step ...), for a later ``resume``.
     steps : optimiser steps (exactly this many), or
     minutes : a wall-clock budget instead (the number of steps then depends on the machine).
     split, where, split_fractions : which samples (see
@@ -128,7 +134,7 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     (model, info) with info keys steps, epochs, seconds, final_loss, pos_weight, n_samples,
     n_runs, device.
     """
-    import torch  # lazy: heavy (~2 s), see the module docstring
+    torch = import_torch("training")  # lazy: heavy (~2 s), see the module docstring
     from torch.utils.data import DataLoader
 
     if (steps is None) == (minutes is None):
@@ -162,9 +168,13 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         loader = DataLoader(ds.concat, batch_size=batch, sampler=sampler, drop_last=False)
     use_amp = (dev.type == "cuda") if amp is None else bool(amp and dev.type == "cuda")
     scaler = torch.amp.GradScaler("cuda", enabled=use_amp)
-    # fault pixels are rare: weight them by the background / fault ratio of a few batches
-    frac = np.mean([float((y > 0).float().mean()) for _, (_, y) in zip(range(8), loader)])
-    pos_weight = torch.tensor(min((1 - frac) / max(frac, 1e-6), 50.0), device=dev)
+    if resume is None:
+        # fault pixels are rare: weight them by the background / fault ratio of a few batches
+        frac = np.mean([float((y > 0).float().mean()) for _, (_, y) in zip(range(8), loader)])
+        pos_weight = torch.tensor(min((1 - frac) / max(frac, 1e-6), 50.0), device=dev)
+    else:
+        frac = float(resume["fault_fraction"])
+        pos_weight = torch.tensor(float(resume["pos_weight"]), device=dev)
     model = build_unet(base).to(dev)
     opt = torch.optim.Adam(model.parameters(), lr=lr)
     bce = torch.nn.BCEWithLogitsLoss(pos_weight=pos_weight)
@@ -173,9 +183,20 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
 
     val = _validation_set(stores, target, split_fractions) if val_every else None
     best = {"f1": -1.0, "step": 0, "state": None, "bad": 0, "history": []}
+    if resume is not None:
+        model.load_state_dict(resume["model"])
+        opt.load_state_dict(resume["optimizer"])
+        step, epoch = int(resume["step"]), int(resume["epoch"])
+        best.update(resume["best"])
+        gen.manual_seed(seed + step)  # a different crop order than the one already trained on
+
+    def state() -> dict[str, Any]:
+        return training_state(model, opt, step=step, epoch=epoch, pos_weight=float(pos_weight),
+                              fault_fraction=float(frac), best=best)
+
     bar = None
     if progress:
-        bar = tqdm(total=steps, unit="step", desc="train")
+        bar = tqdm(total=steps, initial=min(step, steps or step), unit="step", desc="train")
 
     def done() -> bool:
         if best["bad"] >= patience:
@@ -226,6 +247,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
             if val is not None and step % int(val_every) == 0:
                 validate()
                 model.train()
+            if save is not None and save_every and step % int(save_every) == 0:
+                save(state())
             if log and step % 50 == 0:
                 log(f"  step {step:5d}  epoch {epoch:3d}  loss {np.mean(losses[-50:]):.4f}  "
                     f"{time.perf_counter() - t0:6.0f} s")
@@ -234,6 +257,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         epoch += 1
     if bar is not None:
         bar.close()
+    if save is not None:
+        save(state())
     if val is not None and best["state"] is not None:
         model.load_state_dict(best["state"])
     info = {"steps": step, "epochs": epoch, "seconds": round(time.perf_counter() - t0, 1),
@@ -248,6 +273,18 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         log(f"trained {step} steps ({epoch} epochs) in {info['seconds']:.0f} s, "
             f"final loss {info['final_loss']:.4f}")
     return model, info
+
+
+def training_state(model: Any, opt: Any, *, step: int, epoch: int, pos_weight: float,
+                   fault_fraction: float, best: Mapping[str, Any]) -> dict[str, Any]:
+    """What :func:`train_unet` needs to ``resume``: weights, optimiser, step, epoch, the loss's
+    positive weight and the best validation model so far (plain types and tensors, so that
+    ``torch.load(..., weights_only=True)`` reads it)."""
+    return {"model": model.state_dict(), "optimizer": opt.state_dict(), "step": int(step),
+            "epoch": int(epoch), "pos_weight": float(pos_weight),
+            "fault_fraction": float(fault_fraction),
+            "best": {"f1": float(best["f1"]), "step": int(best["step"]), "state": best["state"],
+                     "bad": int(best["bad"]), "history": [list(h) for h in best["history"]]}}
 
 
 def _validation_set(stores: list, target: str,
@@ -285,7 +322,7 @@ class _Mixed:
 
 def _augment(x: Any, y: Any, gen: Any) -> tuple[Any, Any]:
     """Per-crop left-right flip, polarity flip and amplitude scaling (x 0.5 .. 2)."""
-    import torch  # lazy: heavy (~2 s), see the module docstring
+    torch = import_torch("training")  # lazy: heavy (~2 s), see the module docstring
 
     n = x.shape[0]
     flip = torch.rand(n, generator=gen) < 0.5

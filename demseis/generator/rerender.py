@@ -99,12 +99,13 @@ def relabel(source: str | Path, out: str | Path, *, labels: dict[str, Any],
         src = Path(source)
         root = open_store(src)
         cfg = relabel_config(dict(root.attrs)["config"], labels)
-        return _redo(src, out, cfg, overwrite=overwrite, progress=progress)
+        return _redo(src, out, cfg, overwrite=overwrite, progress=progress, desc="relabel")
 
 
 def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
-          progress: bool) -> SweepSummary:
-    """Render and label every done run of ``src`` again with ``cfg`` into ``out``."""
+          progress: bool, desc: str = "render") -> SweepSummary:
+    """Render and label every done run of ``src`` again with ``cfg`` into ``out``; ``desc``
+    labels the progress bar (the command's name)."""
     t0 = time.perf_counter()
     if Path(out).resolve() == src.resolve():
         raise StoreError("--out must differ from the source store")
@@ -114,7 +115,7 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
     pending = [int(i) for i in np.flatnonzero(status != 1)]
     summary = SweepSummary(store=str(out), n_shards=len(status), samples_per_shard=cfg.samples_per_run,
                            done_before=len(status) - len(pending))
-    bar = _progress_bar(len(pending) * cfg.samples_per_run, progress and bool(pending), desc="render")
+    bar = _progress_bar(len(pending) * cfg.samples_per_run, progress and bool(pending), desc=desc)
     try:
         for run in pending:
             if src_status[run] != 1:

@@ -46,6 +46,7 @@ from demseis.generator.pipeline import run_shard
 from demseis.generator.sampling import run_params
 from demseis.generator.survey import on_grid, trace_spacing
 from demseis.generator.workers import (
+    main_module_hidden,
     set_worker_env,
     sigint_ignored,
     start_forkserver,
@@ -257,6 +258,16 @@ def run_cost(cfg: Config, run: int) -> float:
     return get_engine(cfg.model.engine).cost(cfg, run_params(cfg, run))
 
 
+def human_bytes(n: float) -> str:
+    """``n`` bytes in the largest binary unit that keeps the number >= 1: ``"69.0 TiB"``."""
+    units = ("bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB")
+    k = 0
+    while n >= 1024 and k < len(units) - 1:
+        n /= 1024
+        k += 1
+    return f"{n:,.0f} {units[k]}" if k == 0 else f"{n:,.1f} {units[k]}"
+
+
 def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
     """Human lines describing the sweep without computing it."""
     grid = grid_of(cfg)
@@ -273,7 +284,7 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
         f"{cfg.renders_per_run_snapshot} renders per run)",
         f"sample shape: {h} x {w} ({cfg.output.domain} domain; {grid.cell_m:g} m cells); arrays: "
         + ", ".join(f"{k} {v}" for k, v in array_dtypes(cfg).items()),
-        f"size on disk: at most {n_runs * S * bytes_per_sample / 2**20:,.1f} MiB (uncompressed)"
+        f"size on disk: at most {human_bytes(n_runs * S * bytes_per_sample)} (uncompressed)"
         + (" plus particle snapshots" if engine.particles else ""),
         f"estimated time: up to ~{secs * n_runs / 60:,.1f} core-minutes "
         f"(~{secs:,.0f} s per run on one core at most; divide by the worker count for wall time)",
@@ -337,7 +348,10 @@ def _run_sweep(
                 summary.compute_seconds = time.perf_counter() - t_compute
                 summary.phase_seconds["compute"] = summary.compute_seconds
             else:
-                _run_distributed(str(out), cfg, pending, summary, bar, workers, remote, retries)
+                # absolute: a worker's working directory is its forkserver's, which may differ
+                # from this process's (a notebook that changed directory since)
+                _run_distributed(str(out.absolute()), cfg, pending, summary, bar, workers, remote,
+                                 retries)
     finally:
         bar.close()
         if remote is not None and not pending:
@@ -396,10 +410,14 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
     # _start_local_cluster) and the driver closes the cluster in the ``finally`` below, so an
     # interrupted sweep prints no worker traceback and leaks no semaphore.
     client = None
+    hidden = contextlib.ExitStack()
     try:
         if remote is not None:
             client = remote
         else:
+            # the caller's __main__ stays hidden while the cluster lives: dask restarts a
+            # crashed worker in a new process (demseis.generator.workers)
+            hidden.enter_context(main_module_hidden())
             client, cluster = _start_local_cluster(summary, workers, retries)
         summary.phase_seconds["start"] = time.perf_counter() - t_start
         t_compute = time.perf_counter()
@@ -442,6 +460,7 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
                 client.close()
             if cluster is not None:
                 cluster.close()
+            hidden.close()
         summary.phase_seconds["close"] = time.perf_counter() - t_close
 
 

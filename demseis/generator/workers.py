@@ -11,9 +11,16 @@ takes ~0.03 s instead of ~0.5 s.
 :func:`demseis.api.generate` starts the server before it imports the rest of the sweep, so that
 the server's preload (~1.5 s of CPU) runs on another core while the driver imports, prepares
 the store and starts the scheduler. Measured with ``python benchmarks/sweep.py --methods
-forkserver,spawn`` (README, "Measured performance").
+forkserver,spawn``.
 
 ``DEMSEIS_WORKER_START=spawn`` (or ``forkserver``) forces a method.
+
+The workers need no user code, so nothing of the caller's ``__main__`` reaches them: while the
+server and the workers start (and for the cluster's whole life, since dask restarts a crashed
+worker), :func:`main_module_hidden` hides the caller's main module from multiprocessing, which
+would otherwise run the caller's script again in every new process. ``demseis.generate(...)``
+therefore works from a script without an ``if __name__ == "__main__":`` guard, from stdin
+(``python - < script.py``), from ``python -m`` and in a Jupyter kernel.
 """
 
 from __future__ import annotations
@@ -23,6 +30,7 @@ import multiprocessing
 import multiprocessing.forkserver
 import os
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 
@@ -72,8 +80,40 @@ def start_forkserver() -> None:
     set_worker_env()
     multiprocessing.get_context("forkserver").set_forkserver_preload(
         ["demseis.generator._forkserver_preload"])
-    with sigint_ignored():
+    with sigint_ignored(), main_module_hidden():
         multiprocessing.forkserver.ensure_running()
+
+
+_ABSENT = object()
+
+
+@contextlib.contextmanager
+def main_module_hidden() -> Iterator[None]:
+    """Processes multiprocessing starts in the block do not run the caller's ``__main__`` again.
+
+    multiprocessing's spawn and forkserver children re-run the parent's main script (its
+    ``__main__.__file__``) or re-import its main module (``__main__.__spec__.name``) before
+    they unpickle their task. A script without a ``__main__`` guard then starts a sweep inside
+    every worker, and a script read from stdin has a ``__file__`` of ``<stdin>`` that does not
+    exist. The block removes ``__file__`` and clears ``__spec__`` of ``sys.modules["__main__"]``
+    and restores them at its end; the sweep's workers import only demseis and dask.
+    """
+    main = sys.modules.get("__main__")
+    if main is None:
+        yield
+        return
+    saved_file = main.__dict__.pop("__file__", _ABSENT)
+    saved_spec = main.__dict__.get("__spec__", _ABSENT)
+    main.__spec__ = None
+    try:
+        yield
+    finally:
+        if saved_spec is _ABSENT:
+            main.__dict__.pop("__spec__", None)
+        else:
+            main.__spec__ = saved_spec
+        if saved_file is not _ABSENT:
+            main.__file__ = saved_file
 
 
 @contextlib.contextmanager

@@ -56,7 +56,7 @@ def test_injected_disk_full_then_resume(reference, tmp_path, monkeypatch, capsys
     out = tmp_path / "full.zarr"
     assert main(_gen(out)) == 2
     _one_error_line(capsys.readouterr().err, str(out), "No space left on device", "resume")
-    assert list(shard_status(out)) == [0, 0]  # the partial shard is not marked done
+    assert list(shard_status(out)) == [0, 0, 0]  # the partial shard is not marked done
     monkeypatch.setattr(store, "_write_array", real)
     assert main(_gen(out)) == 0
     assert_same_bytes(reference, out)

@@ -96,7 +96,7 @@ def test_a_registered_engine_goes_from_generate_to_the_dataset(tmp_path, flat_en
         parse_config(tiny(engine="flat", width_m=400.0))
     out = tmp_path / "flat.zarr"
     store = demseis.generate(tiny(engine="flat"), out=out, workers=0, progress=False)
-    assert sorted(flat_engine.simulated) == [0, 1]
+    assert sorted(flat_engine.simulated) == [0, 1, 2]
     assert validate_store(out).ok
     ds = FaultSegDataset(out, targets=("fault", "layer"))
     x, y = ds[3]

@@ -43,7 +43,7 @@ def test_same_command_same_bytes(tiny_store, tmp_path):
 def test_rerun_on_complete_store_is_a_no_op(tiny_store, capsys):
     before = tree_bytes(tiny_store)
     assert main(["generate", "--preset", "tiny", "--out", str(tiny_store), "--workers", "0", "--quiet"]) == 0
-    assert "2 already done, 0 written now" in capsys.readouterr().out
+    assert "3 already done, 0 written now" in capsys.readouterr().out
     assert tree_bytes(tiny_store) == before
 
 
@@ -138,7 +138,7 @@ def test_dry_run_writes_nothing(tmp_path, capsys):
 def test_info(tiny_store, capsys):
     assert main(["info", str(tiny_store)]) == 0
     text = capsys.readouterr().out
-    assert "samples: 12 in 2 shards of 6; done shards: 2" in text
+    assert "samples: 18 in 3 shards of 6; done shards: 3" in text
     assert "dip_deg" in text and "45, 60" in text
     assert main(["info", str(tiny_store.parent / "missing.zarr")]) == 2
 
@@ -149,10 +149,10 @@ def test_render_reuses_particles(tiny_store, tmp_path):
     src = zarr.open_group(str(tiny_store), mode="r")
     new = zarr.open_group(str(out), mode="r")
     n_snap = src.attrs["config"]["model"]["n_snapshots"]
-    assert new["seismic"].shape[0] == 2 * n_snap * 2
+    assert new["seismic"].shape[0] == 3 * n_snap * 2
     assert sorted(set(new["params/freq_hz"][:].tolist())) == [25.0, 50.0]
     # the labels come from the same particles: identical to the source's, snapshot by snapshot
-    for run in (0, 1):
+    for run in (0, 1, 2):
         for k in range(n_snap):
             a = src["fault"][np.flatnonzero((src["params/run_id"][:] == run) & (src["params/snapshot"][:] == k))[0]]
             b = new["fault"][np.flatnonzero((new["params/run_id"][:] == run) & (new["params/snapshot"][:] == k))[0]]
@@ -181,7 +181,7 @@ def test_dataloader_two_workers(tiny_store):
         assert x.dtype == torch.float32 and x.shape[1:] == (1, 32, 32)
         assert y.shape[1:] == (32, 32)
         seen += x.shape[0]
-    assert seen == len(ds) == 12
+    assert seen == len(ds) == 18
 
 
 def test_preview_writes_figures(tiny_store, tmp_path):
@@ -266,7 +266,7 @@ def test_unstable_run_recorded_and_sweep_goes_on(tmp_path, monkeypatch, capsys):
     code = main(["generate", "--preset", "tiny", "--out", str(out), "--workers", "0", "--quiet"])
     text = capsys.readouterr().out
     assert code == 1
-    assert "1 written now, 1 failed" in text
+    assert "2 written now, 1 failed" in text
     assert "run 1 failed: SimulationError: kinetic energy blew up at step 123" in text
     # the same seed fails the same way: the summary says what to change, not "rerun"
     assert "fails the same way" in text and "wall_speed_m_s" in text
@@ -275,5 +275,5 @@ def test_unstable_run_recorded_and_sweep_goes_on(tmp_path, monkeypatch, capsys):
     assert "run 1: SimulationError" in capsys.readouterr().out
     monkeypatch.setattr(sweep, "run_shard", real)
     assert main(["generate", "--preset", "tiny", "--out", str(out), "--workers", "0", "--quiet"]) == 0
-    assert "1 already done, 1 written now, 0 failed" in capsys.readouterr().out
+    assert "2 already done, 1 written now, 0 failed" in capsys.readouterr().out
     assert main(["validate", str(out)]) == 0

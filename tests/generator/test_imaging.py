@@ -36,11 +36,11 @@ def test_imaging_is_drawn_and_recorded_per_sample(both_store):
     root = zarr.open_group(str(both_store), mode="r")
     assert list(root.attrs["param_codes"]["imaging"]) == ["1d", "psf"]
     img = root["params/imaging"][:]
-    assert root["seismic"].shape[0] == 2 * 3 * 2               # runs x snapshots x imaging
+    assert root["seismic"].shape[0] == 3 * 3 * 2               # runs x snapshots x imaging
     assert sorted(set(img.tolist())) == [0, 1]
     np.testing.assert_array_equal(root["params/psf_max_angle_deg"][:], 25.0)
     pairs = _pairs(root)
-    assert len(pairs) == 6
+    assert len(pairs) == 9
     for i, j in pairs:
         a, b = root["seismic"][i].astype(np.float64), root["seismic"][j].astype(np.float64)
         np.testing.assert_array_equal(root["fault"][i], root["fault"][j])   # same labels
@@ -63,7 +63,7 @@ def test_the_1d_samples_are_the_default_render(both_store, tmp_path):
 def test_info_shows_the_imaging(both_store, capsys):
     assert main(["info", str(both_store)]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert any(ln.split() == ["imaging", "1d", "(6),", "psf", "(6)"] for ln in lines)
+    assert any(ln.split() == ["imaging", "1d", "(9),", "psf", "(9)"] for ln in lines)
     assert any(ln.split() == ["psf_max_angle_deg", "25"] for ln in lines)
 
 
@@ -73,7 +73,7 @@ def test_render_an_existing_store_with_the_psf(both_store, tmp_path):
                  "--psf-max-angle", "20,45", "--psf-aperture", "500", "--out", str(out),
                  "--quiet"]) == 0
     new = zarr.open_group(str(out), mode="r")
-    assert new["seismic"].shape[0] == 2 * 3 * 2               # runs x snapshots x angles
+    assert new["seismic"].shape[0] == 3 * 3 * 2               # runs x snapshots x angles
     np.testing.assert_array_equal(new["params/imaging"][:], 1)
     assert sorted(set(new["params/psf_max_angle_deg"][:].tolist())) == [20.0, 45.0]
     np.testing.assert_array_equal(new["params/psf_aperture_m"][:], 500.0)
@@ -96,7 +96,7 @@ def test_render_keeps_the_source_imaging_by_default(both_store, tmp_path):
 
 @pytest.mark.parametrize("args, msg", [
     (["--imaging", "2d"], "'2d' is not one of"),
-    (["--psf-max-angle", "120"], "psf_max_angle_deg"),
+    (["--psf-max-angle", "120"], "--psf-max-angle 120.0 is not allowed"),
     (["--psf-aperture", "100,200"], "give one value"),
 ])
 def test_bad_imaging_args(both_store, tmp_path, capsys, args, msg):

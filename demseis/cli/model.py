@@ -1,0 +1,77 @@
+"""``demseis train`` and ``demseis predict``: a fault-segmentation U-Net from a store, and the
+fault probability of any section (SEG-Y or .npy) with it. Both need torch (the ``[torch]``
+extra); see :mod:`demseis.evaluation.model`."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from demseis.cli._args import nonneg_int, pos_int
+
+
+def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+    """Add ``train`` and ``predict``."""
+    t = sub.add_parser(
+        "train", help="train a fault-segmentation U-Net on a store (needs demseis[torch])",
+        description="Train the project's U-Net on a store's training runs (CPU or CUDA), keep "
+        "the best model on its validation runs, and print and save precision, recall, F1 and "
+        "AP on its test runs (whole runs are held out, so the store needs at least 3). Writes "
+        "OUT, OUT with suffix .json (metrics and settings) and OUT.ckpt (training state for "
+        "--resume).")
+    t.add_argument("store", metavar="STORE", help="demseis store with seismic and fault arrays")
+    t.add_argument("--out", default="model.pt", help="model file (default model.pt)")
+    t.add_argument("--steps", type=pos_int, default=300,
+                   help="optimiser steps in all, counting those before a --resume (default 300)")
+    t.add_argument("--crop", type=pos_int, default=None,
+                   help="square training crop, a multiple of 4 (default 96, or the sections' "
+                   "smaller side)")
+    t.add_argument("--batch", type=pos_int, default=8, help="batch size (default 8)")
+    t.add_argument("--base", type=pos_int, default=16, help="U-Net base width (default 16)")
+    t.add_argument("--lr", type=float, default=2e-3, help="Adam learning rate (default 0.002)")
+    t.add_argument("--seed", type=nonneg_int, default=0, help="seed (default 0)")
+    t.add_argument("--device", default=None,
+                   help="cpu, cuda, cuda:1 ... (default: CUDA when available)")
+    t.add_argument("--val-every", type=pos_int, default=None,
+                   help="validate every this many steps (default: 5 times per training)")
+    t.add_argument("--save-every", type=pos_int, default=50,
+                   help="write OUT.ckpt every this many steps (default 50)")
+    t.add_argument("--resume", action="store_true", help="continue from OUT.ckpt")
+    t.add_argument("--threads", type=pos_int, default=None, help="torch CPU threads")
+    t.add_argument("--quiet", action="store_true", help="no progress bar or log lines")
+    t.set_defaults(func=_train_command)
+
+    p = sub.add_parser(
+        "predict", help="fault probability of a SEG-Y or .npy section with a trained model",
+        description="Apply a model from 'demseis train' to a SEG-Y section (one trace per "
+        "column) or a .npy array (H, W) or (N, H, W) of any size. Writes the fault probability "
+        "as SEG-Y with the input's headers (float32 samples) or as .npy; 'demseis score' "
+        "reads either.")
+    p.add_argument("model", metavar="MODEL", help="model file from demseis train")
+    p.add_argument("input", metavar="IN", help="input section: .sgy, .segy or .npy")
+    p.add_argument("--out", required=True, help="output: .sgy/.segy (SEG-Y input) or .npy")
+    p.add_argument("--device", default=None,
+                   help="cpu, cuda, cuda:1 ... (default: CUDA when available)")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    p.set_defaults(func=_predict_command)
+
+
+def _train_command(args: argparse.Namespace) -> int:
+    from demseis.api import train
+
+    quiet = args.quiet
+    train(args.store, args.out, steps=args.steps, crop=args.crop, batch=args.batch,
+          base=args.base, lr=args.lr, seed=args.seed, device=args.device,
+          val_every=args.val_every, save_every=args.save_every, resume=args.resume,
+          threads=args.threads, progress=not quiet and sys.stderr.isatty(),
+          log=None if quiet else print)
+    return 0
+
+
+def _predict_command(args: argparse.Namespace) -> int:
+    from demseis.api import predict
+
+    out = predict(args.model, args.input, args.out, device=args.device,
+                  overwrite=args.overwrite)
+    print(f"wrote {out}")
+    return 0

@@ -1,0 +1,297 @@
+"""``demseis train`` and ``demseis predict``: a fault-segmentation U-Net from a store to a file,
+and from the file to the fault probability of any section (a store's, or your SEG-Y).
+
+::
+
+    from demseis.evaluation.model import train_model, predict_file
+    metrics = train_model("quick.zarr", "model.pt", steps=300)  # held-out precision, recall, F1, AP
+    predict_file("model.pt", "line.sgy", "faults.sgy")          # probability with line.sgy's headers
+
+Training is :func:`demseis.evaluation.train.train_unet` on the store's ``train`` runs; the model
+kept is the best on the ``val`` runs, and the metrics are those of the ``test`` runs (never seen
+in training or selection), scored by :func:`demseis.evaluation.scoring.score_store` at a
+tolerance of :data:`TOLERANCE_PX` pixels. The three splits are whole runs
+(:func:`demseis.datasets.split_of_shards`), so a store needs at least three runs.
+
+Files: ``OUT`` (``torch.save`` of a dict: the weights, the U-Net width, what it was trained on
+and its metrics), ``OUT`` with the suffix ``.json`` (the metrics and settings), and ``OUT.ckpt``
+(the training state every ``save_every`` steps, which ``resume=True`` continues from).
+torch is imported inside the functions (the ``[torch]`` extra).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from demseis.datasets import FaultSegDataset, open_store, store_layout
+from demseis.errors import InputError, import_torch
+from demseis.evaluation.scoring import score_store
+from demseis.evaluation.segyfile import is_segy, read_segy_section, write_segy_like
+from demseis.evaluation.train import build_unet, predict_sections, train_unet
+
+#: the model file's format tag and version
+FORMAT = "demseis-unet"
+VERSION = 1
+#: matching distance (pixels) of the held-out metrics, as in training's validation
+TOLERANCE_PX = 2
+#: the default square training crop, cut to the sections' smaller side on smaller stores
+DEFAULT_CROP = 96
+#: prediction tiles (pixels, square) and their overlap, for sections larger than a tile
+TILE, OVERLAP = 512, 64
+
+
+def metrics_path(out: str | Path) -> Path:
+    """The JSON written beside the model ``out`` (``model.pt`` -> ``model.json``)."""
+    return Path(out).with_suffix(".json")
+
+
+def checkpoint_path(out: str | Path) -> Path:
+    """The training state written beside the model ``out`` (``model.pt`` -> ``model.pt.ckpt``)."""
+    return Path(f"{out}.ckpt")
+
+
+def check_trainable(store: str | Path, crop: int | None) -> int:
+    """The training crop for ``store``; InputError with the reason when it cannot be trained on.
+
+    The store needs a ``seismic`` and a ``fault`` array, at least three runs (train,
+    validation and test are whole runs) with complete samples in each split, and sections of
+    at least 4 x 4 pixels. ``crop`` None picks :data:`DEFAULT_CROP`, cut to the sections'
+    smaller side (a multiple of 4); a given ``crop`` must fit.
+    """
+    layout = store_layout(open_store(Path(store), "r"))
+    missing = [a for a in ("seismic", "fault") if a not in layout.arrays]
+    if missing:
+        raise InputError(f"store {str(store)!r} has no {' or '.join(missing)} array to train on")
+    if layout.n_shards < 3:
+        raise InputError(f"store {str(store)!r} has {layout.n_shards} run(s); training needs at "
+                         "least 3 (whole runs are held out for validation and testing): "
+                         "generate more runs (sweep.n_runs)")
+    for split in ("train", "val", "test"):
+        if len(FaultSegDataset(store, inputs=("seismic",), targets=("fault",), split=split)) == 0:
+            raise InputError(f"store {str(store)!r}: the {split} runs have no complete sample; "
+                             "finish the sweep first (rerun demseis generate)")
+    side = min(layout.shape)
+    if side < 4:
+        raise InputError(f"store {str(store)!r}: sections of {layout.shape[0]} x "
+                         f"{layout.shape[1]} pixels are too small to train on (at least 4 x 4)")
+    fit = side - side % 4
+    if crop is None:
+        return min(DEFAULT_CROP, fit)
+    if crop < 4 or crop % 4 or crop > side:
+        raise InputError(f"--crop {crop}: use a multiple of 4 from 4 to {fit} (the sections of "
+                         f"{str(store)!r} are {layout.shape[0]} x {layout.shape[1]} pixels)")
+    return int(crop)
+
+
+def train_model(store: str | Path, out: str | Path, *, steps: int = 300,
+                crop: int | None = None, batch: int = 8, base: int = 16, lr: float = 2e-3,
+                seed: int = 0, device: str | None = None, val_every: int | None = None,
+                save_every: int = 50, resume: bool = False, threads: int | None = None,
+                progress: bool = True,
+                log: Callable[[str], None] | None = print) -> dict[str, Any]:
+    """Train the U-Net on ``store`` and write it to ``out``; return the held-out metrics.
+
+    Parameters
+    ----------
+    store : a demseis store with ``seismic`` and ``fault`` arrays and at least three runs.
+    out : the model file (``model.pt``); ``model.json`` and ``model.pt.ckpt`` go beside it.
+    steps : optimiser steps in all (with ``resume``, counted from the first start).
+    crop : square training crop (default: 96, or the sections' smaller side when less).
+    batch, base, lr, seed : batch size, U-Net width, Adam learning rate, seed.
+    device : ``"cpu"``, ``"cuda"``, ``"cuda:1"`` ... (default: CUDA when available).
+    val_every : validate on the ``val`` runs every this many steps and keep the best model
+        (default: 5 times per training).
+    save_every : write the training state to ``out.ckpt`` every this many steps.
+    resume : continue from ``out.ckpt`` (InputError when there is none).
+    threads : torch CPU threads.
+    progress : a progress bar on stderr.
+    log : called with progress lines (None: silent).
+
+    Returns
+    -------
+    dict
+        ``precision``, ``recall``, ``f1``, ``iou``, ``ap`` (average precision over thresholds)
+        on the test runs at threshold 0.5 and :data:`TOLERANCE_PX`, and the training settings;
+        the same dict is written to ``out.json``.
+    """
+    torch = import_torch("demseis train")
+    if steps < 1:
+        raise InputError(f"--steps {steps}: use at least 1")
+    for name, value in (("batch", batch), ("base", base), ("save-every", save_every)):
+        if value < 1:
+            raise InputError(f"--{name} {value}: use at least 1")
+    if val_every is not None and val_every < 1:
+        raise InputError(f"--val-every {val_every}: use at least 1")
+    crop = check_trainable(store, crop)
+    out = Path(out)
+    if not out.parent.is_dir():
+        raise InputError(f"--out {str(out)!r}: its directory does not exist")
+    ckpt = checkpoint_path(out)
+    state = None
+    if resume:
+        if not ckpt.is_file():
+            raise InputError(f"--resume: no training state {str(ckpt)!r} to resume from")
+        state = torch.load(ckpt, map_location="cpu", weights_only=True)
+        if state.get("settings", {}).get("store") != str(Path(store).resolve()) \
+                or state["settings"].get("base") != base:
+            raise InputError(f"--resume: {str(ckpt)!r} was trained on another store or width")
+        if int(state["step"]) >= steps:
+            raise InputError(f"--resume: {str(ckpt)!r} has done {state['step']} steps already; "
+                             "give a larger --steps")
+    settings = {"store": str(Path(store).resolve()), "steps": steps, "crop": crop,
+                "batch": batch, "base": base, "lr": lr, "seed": seed}
+
+    def save(training: dict[str, Any]) -> None:
+        _atomic_save(torch, {**training, "settings": settings}, ckpt)
+
+    model, info = train_unet(str(store), steps=steps, crop=crop, batch=batch, base=base, lr=lr,
+                             seed=seed, threads=threads, device=device,
+                             val_every=val_every or max(1, steps // 5), patience=steps,
+                             log=log, progress=progress, resume=state, save_every=save_every,
+                             save=save)
+    test = FaultSegDataset(store, inputs=("seismic",), targets=("fault",), split="test")
+    sections = np.stack([test[i][0][0].numpy() for i in range(len(test))])
+    prob = predict_sections(model, sections)
+    result = score_store(prob, str(store), indices=test.indices, threshold=0.5,
+                         tolerance_px=TOLERANCE_PX)
+    o = result.overall
+    metrics = {"precision": _num(o.precision), "recall": _num(o.recall), "f1": _num(o.f1),
+               "iou": _num(o.iou), "ap": _num(o.ap), "threshold": 0.5,
+               "tolerance_px": TOLERANCE_PX, "test_samples": int(len(test)),
+               "test_runs": int(len(np.unique(test.run_ids))),
+               "train_runs": int(info["n_runs"]), "device": info["device"],
+               "steps": int(info["steps"]), "best_val_f1": info.get("best_val_f1"),
+               "best_step": info.get("best_step"), **settings}
+    blob = {"format": FORMAT, "version": VERSION, "base": base, "target": "fault",
+            "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
+            "metrics": metrics}
+    _atomic_save(torch, blob, out)
+    metrics_path(out).write_text(json.dumps(metrics, indent=2) + "\n")
+    if log:
+        log(f"test runs ({metrics['test_samples']} samples, tolerance {TOLERANCE_PX} px): "
+            f"precision {metrics['precision']:.3f}  recall {metrics['recall']:.3f}  "
+            f"F1 {metrics['f1']:.3f}  AP {metrics['ap']:.3f}")
+        log(f"wrote {out} and {metrics_path(out)}")
+    return metrics
+
+
+def _num(x: Any) -> float:
+    return round(float(x), 4)
+
+
+def _atomic_save(torch: Any, obj: Any, path: Path) -> None:
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    try:
+        torch.save(obj, tmp)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def load_model(path: str | Path, device: str | None = None) -> Any:
+    """The U-Net saved by :func:`train_model`, in eval mode on ``device`` (default: CUDA when
+    available); its ``demseis_metrics`` attribute holds the saved metrics."""
+    torch = import_torch("demseis predict")
+    if not os.path.isfile(path):
+        raise InputError(f"model {str(path)!r} does not exist")
+    try:
+        blob = torch.load(str(path), map_location="cpu", weights_only=True)
+    except Exception as exc:  # noqa: BLE001 - any unreadable file is the same user error
+        raise InputError(f"model {str(path)!r}: cannot read ({type(exc).__name__})") from None
+    if not isinstance(blob, dict) or blob.get("format") != FORMAT:
+        raise InputError(f"model {str(path)!r} is not a demseis model (made by demseis train)")
+    model = build_unet(int(blob["base"]))
+    model.load_state_dict(blob["state_dict"])
+    dev = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
+    model.to(dev).eval()
+    model.demseis_metrics = blob.get("metrics", {})
+    return model
+
+
+def predict_array(model: Any, sections: np.ndarray, *, tile: int = TILE,
+                  overlap: int = OVERLAP) -> np.ndarray:
+    """Fault probabilities of a (H, W) section or (N, H, W) sections, of any size.
+
+    A section larger than ``tile`` in either direction is predicted in overlapping tiles whose
+    probabilities are averaged; every piece is padded to a multiple of 4 (the U-Net's), by
+    edge replication below 4 pixels and reflection otherwise.
+    """
+    arr = np.asarray(sections, dtype=np.float32)
+    if arr.ndim not in (2, 3) or 0 in arr.shape:
+        raise InputError(f"sections must be (H, W) or (N, H, W), got shape {arr.shape}")
+    if not np.isfinite(arr).all():
+        raise InputError("sections hold NaN or infinite values")
+    stack = arr[None] if arr.ndim == 2 else arr
+    out = np.stack([_predict_one(model, s, tile, overlap) for s in stack])
+    return out[0] if arr.ndim == 2 else out
+
+
+def _starts(n: int, tile: int, overlap: int) -> list[int]:
+    if n <= tile:
+        return [0]
+    step = tile - overlap
+    starts = list(range(0, n - tile, step)) + [n - tile]
+    return sorted(set(starts))
+
+
+def _predict_one(model: Any, sec: np.ndarray, tile: int, overlap: int) -> np.ndarray:
+    h, w = sec.shape
+    small = min(h, w) < 4
+    padded = np.pad(sec, ((0, max(0, 4 - h)), (0, max(0, 4 - w))), mode="edge") if small else sec
+    total = np.zeros(padded.shape, np.float32)
+    count = np.zeros(padded.shape, np.float32)
+    ph, pw = padded.shape
+    for r in _starts(ph, tile, overlap):
+        for c in _starts(pw, tile, overlap):
+            piece = padded[r: r + tile, c: c + tile]
+            total[r: r + tile, c: c + tile] += predict_sections(model, piece[None])[0]
+            count[r: r + tile, c: c + tile] += 1
+    return (total / count)[:h, :w]
+
+
+def predict_file(model: Any, inp: str | Path, out: str | Path, *, device: str | None = None,
+                 overwrite: bool = False) -> Path:
+    """Fault probability of the section(s) in ``inp``, written to ``out``.
+
+    Parameters
+    ----------
+    model : a model file from :func:`train_model`, or a loaded model (:func:`load_model`).
+    inp : a SEG-Y file (``.sgy`` / ``.segy``: one 2-D section, a trace per column) or a
+        ``.npy`` array (H, W) or (N, H, W).
+    out : ``.sgy`` / ``.segy`` (SEG-Y input only: the input's headers, float32 samples) or
+        ``.npy`` (float32; (1, H, W) for SEG-Y input, so that ``demseis score`` reads it;
+        else the input's shape).
+    overwrite : replace an existing ``out``.
+    """
+    inp, out = Path(inp), Path(out)
+    if out.exists() and not overwrite:
+        raise InputError(f"--out {str(out)!r} exists; pass --overwrite to replace it")
+    if not (is_segy(out) or out.suffix == ".npy"):
+        raise InputError(f"--out {str(out)!r}: name a .sgy, .segy or .npy file")
+    if is_segy(inp):
+        data = read_segy_section(inp)
+    elif inp.suffix == ".npy":
+        if not inp.is_file():
+            raise InputError(f"{str(inp)!r} does not exist")
+        try:
+            data = np.load(inp, allow_pickle=False)
+        except (ValueError, OSError) as exc:
+            raise InputError(f"{str(inp)!r}: cannot read as .npy ({exc})") from None
+    else:
+        raise InputError(f"{str(inp)!r}: give a SEG-Y (.sgy, .segy) or .npy file")
+    if is_segy(out) and not is_segy(inp):
+        raise InputError(f"--out {str(out)!r}: SEG-Y output needs SEG-Y input (its headers)")
+    net = load_model(model, device) if isinstance(model, (str, Path)) else model
+    prob = predict_array(net, data)
+    if is_segy(out):
+        return write_segy_like(prob, inp, out)
+    if is_segy(inp):
+        prob = prob[None]
+    np.save(out, prob.astype(np.float32))
+    return out

@@ -1,0 +1,129 @@
+"""demseis train / predict (and the API's train / predict): generate -> train -> predict a
+SEG-Y section -> score it, on ``tiny`` (and ``quick``, slow); resume; stores too small to train
+on; sections of any size."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("torch")
+
+import demseis  # noqa: E402
+from demseis.cli import main  # noqa: E402
+from demseis.errors import InputError  # noqa: E402
+from demseis.evaluation.model import load_model, predict_array  # noqa: E402
+from tests.generator._helpers import kinematic_cfg  # noqa: E402
+
+FAST = ["--base", "4", "--batch", "4", "--threads", "1", "--device", "cpu", "--quiet"]
+
+
+def _chain(store, tmp_path, capsys, steps: int) -> dict:
+    """train -> export a test sample as SEG-Y -> predict it -> score it; the score's JSON."""
+    model = tmp_path / "model.pt"
+    assert main(["train", str(store), "--out", str(model), "--steps", str(steps), *FAST]) == 0
+    metrics = json.loads(model.with_suffix(".json").read_text())
+    assert set(metrics) >= {"precision", "recall", "f1", "ap", "test_samples", "test_runs"}
+    assert metrics["steps"] == steps and metrics["test_runs"] >= 1
+    assert all(0.0 <= metrics[k] <= 1.0 for k in ("precision", "recall", "f1", "ap"))
+    sample = int(np.flatnonzero(demseis.open(store).done)[-1])
+    sgy, pred = tmp_path / "in.sgy", tmp_path / "pred.sgy"
+    assert main(["export-segy", str(store), "--sample", str(sample), "--out", str(sgy)]) == 0
+    assert main(["predict", str(model), str(sgy), "--out", str(pred), "--device", "cpu"]) == 0
+    import segyio
+
+    with segyio.open(str(sgy), ignore_geometry=True) as a, \
+            segyio.open(str(pred), ignore_geometry=True) as b:
+        assert b.tracecount == a.tracecount and len(b.samples) == len(a.samples)
+        assert b.text[0] == a.text[0]
+        assert all(dict(b.header[i]) == dict(a.header[i]) for i in range(a.tracecount))
+        prob = b.trace.raw[:]
+        assert 0.0 <= prob.min() and prob.max() <= 1.0
+    prefix = tmp_path / "pred.score"
+    assert main(["score", str(pred), str(store), "--indices", str(sample), "--tolerance", "2",
+                 "--out-prefix", str(prefix)]) == 0
+    capsys.readouterr()
+    return json.loads((tmp_path / "pred.score.json").read_text())
+
+
+def test_generate_train_predict_score_on_tiny(tiny_store, tmp_path, capsys):
+    result = _chain(tiny_store, tmp_path, capsys, steps=4)
+    assert result["overall"]["n_samples"] == 1 and result["overall"]["tolerance_px"] == 2
+    assert 0.0 <= result["overall"]["f1"] <= 1.0
+
+
+def test_resume_goes_on_from_the_checkpoint(tiny_store, tmp_path, capsys):
+    model = tmp_path / "m.pt"
+    args = ["train", str(tiny_store), "--out", str(model), "--save-every", "2", *FAST]
+    assert main([*args, "--steps", "2"]) == 0
+    assert (tmp_path / "m.pt.ckpt").is_file()
+    assert main([*args, "--steps", "4", "--resume"]) == 0
+    assert json.loads(model.with_suffix(".json").read_text())["steps"] == 4
+    assert main([*args, "--steps", "4", "--resume"]) == 2  # nothing left to do
+    assert "larger --steps" in capsys.readouterr().err
+    assert main(["train", str(tiny_store), "--out", str(tmp_path / "x.pt"), "--resume",
+                 *FAST]) == 2
+    assert "no training state" in capsys.readouterr().err
+
+
+def test_api_train_and_predict(tiny_store, tmp_path):
+    metrics = demseis.train(tiny_store, out=tmp_path / "a.pt", steps=2, base=4, batch=4,
+                            device="cpu", threads=1, progress=False, log=None)
+    assert 0.0 <= metrics["f1"] <= 1.0
+    section = demseis.open(tiny_store).sample(0)["seismic"]
+    prob = demseis.predict(tmp_path / "a.pt", section, device="cpu")
+    assert prob.shape == section.shape and prob.dtype == np.float32
+    out = demseis.predict(tmp_path / "a.pt", section[None], device="cpu")
+    assert out.shape == (1, *section.shape)
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (3, 7), (37, 41), (130, 70)])
+def test_predict_any_section_size(tiny_store, tmp_path, shape):
+    demseis.train(tiny_store, out=tmp_path / "s.pt", steps=1, base=4, batch=2, device="cpu",
+                  progress=False, log=None)
+    model = load_model(tmp_path / "s.pt", "cpu")
+    x = np.random.default_rng(1).normal(size=shape).astype(np.float32)
+    whole = predict_array(model, x)
+    tiled = predict_array(model, x, tile=32, overlap=8)  # several tiles where larger than 32
+    assert whole.shape == tiled.shape == shape
+    assert np.isfinite(tiled).all() and 0 <= tiled.min() and tiled.max() <= 1
+
+
+def test_stores_too_small_say_why(tmp_path, capsys):
+    small = tmp_path / "two.zarr"
+    cfg = kinematic_cfg("tiny")
+    cfg = dataclasses.replace(cfg, sweep=dataclasses.replace(cfg.sweep, n_runs=2))
+    demseis.generate(cfg, out=small, workers=0)
+    assert main(["train", str(small), "--out", str(tmp_path / "m.pt"), *FAST]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "2 run(s)" in err and "at least 3" in err
+
+
+def test_crop_larger_than_the_sections_names_the_flag(tiny_store, tmp_path, capsys):
+    assert main(["train", str(tiny_store), "--out", str(tmp_path / "m.pt"), "--crop", "64",
+                 *FAST]) == 2
+    err = capsys.readouterr().err
+    assert "--crop 64" in err and "40" in err
+
+
+def test_predict_errors(tmp_path, capsys):
+    assert main(["predict", str(tmp_path / "none.pt"), str(tmp_path / "x.sgy"), "--out",
+                 str(tmp_path / "y.npy")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    np.save(tmp_path / "x.npy", np.zeros((4, 4), np.float32))
+    assert main(["predict", str(tmp_path / "none.pt"), str(tmp_path / "x.npy"), "--out",
+                 str(tmp_path / "y.sgy")]) == 2
+    assert "SEG-Y output needs SEG-Y input" in capsys.readouterr().err
+    with pytest.raises(InputError, match="sections must be"):
+        predict_array(None, np.zeros(5))
+
+
+@pytest.mark.slow
+def test_generate_train_predict_score_on_quick(tmp_path, capsys):
+    store = tmp_path / "quick.zarr"
+    demseis.generate("quick", out=store)
+    result = _chain(store, tmp_path, capsys, steps=6)
+    assert result["overall"]["n_samples"] == 1
