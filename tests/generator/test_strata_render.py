@@ -119,8 +119,9 @@ def test_psf_images_the_strata_at_the_traces(tmp_path, domain):
     one, psf = (np.flatnonzero((imaging == k) & (snap == 0))[0] for k in (0, 1))
     a, b = root["seismic"][one], root["seismic"][psf]
     assert a.shape == b.shape and np.isfinite(b).all()
-    # undeformed: reflectors are flat but for the small lateral variation of the beds
-    assert np.abs(a - b).max() < 0.2 * np.abs(a).max()
+    # undeformed: reflectors are flat but for the small lateral variation of the beds, which
+    # the dip filter smooths: the two images stay alike
+    assert np.corrcoef(a.ravel(), b.ravel())[0, 1] > 0.9
     last = np.flatnonzero(snap == snap.max())
     c, d = (root["seismic"][i] for i in last[:2])
     assert not np.allclose(c, d)
