@@ -22,7 +22,7 @@ from demseis.generator.layout import (array_dtypes, grid_of, param_codes, param_
                                       sample_shape, time_axis_of)
 from demseis.generator.runsetup import property_model_of
 from demseis.generator.sampling import Render, RunSpec
-from demseis.generator.survey import (coarse_velocity, reference_points, damage_factor, fill_gaps,
+from demseis.generator.survey import (coarse_velocity, hold_small_steps, reference_points, damage_factor, fill_gaps,
                                       fine_depths, labels_at_traces, nearest_columns, on_grid,
                                       substeps, to_time, trace_spacing, trace_x)
 from demseis.labels import sample_facts
@@ -184,13 +184,16 @@ def imaging_input(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
                          f"{state.snapshot}): set [output] rendering = 'elements'")
     n = substeps(cfg)
     z = fine_depths(cfg, grid.nz)
-    X, D = np.meshgrid(trace_x(cfg), z)
     x0, y0, unit = reference_points(state.reference, trace_x(cfg), z)
     rock = np.isfinite(x0) & np.isfinite(y0)
-    vp = np.full(X.shape, np.nan)
-    rho = np.full(X.shape, np.nan)
-    vp[rock], rho[rock] = strata_properties(state.strata, x0[rock], y0[rock], unit[rock])
-    vp, rho = fill_gaps(vp), fill_gaps(rho)          # no rock: the nearest rock of the trace
+    whole = bool(rock.all())
+    vp, rho = strata_properties(state.strata, x0 if whole else np.where(rock, x0, 0.0),
+                                y0 if whole else np.where(rock, y0, 0.0), unit)
+    if not whole:                                    # no rock: the nearest rock of the trace
+        vp[~rock] = np.nan
+        rho[~rock] = np.nan
+        vp, rho = fill_gaps(vp), fill_gaps(rho)
+    hold_small_steps(vp, rho)
     change = float(params["fault_zone_impedance"])
     if change != 0.0:
         f = np.sqrt(damage_factor(np.repeat(maps["damage"], n, axis=0), change))

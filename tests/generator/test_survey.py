@@ -6,7 +6,7 @@ import numpy as np
 from demseis.generator.config import parse_config
 from demseis.generator.layout import sample_shape
 from demseis.generator.survey import (cell_rows, coarse_velocity, damage_factor, fill_gaps,
-                                      reference_points,
+                                      hold_small_steps, reference_points,
                                       fine_depths, labels_at_traces, on_grid, substeps,
                                       trace_spacing, trace_x)
 from demseis.seismic import interface_times
@@ -101,7 +101,7 @@ def test_reference_points_interpolate_smooth_maps_and_keep_jumps():
 
     x = np.array([0.0, 25.0])
     z = (np.arange(100) + 0.5) * 1.0
-    x0, y0, unit = reference_points(ref, x, z)
+    x0, y0, unit = reference_points(ref, x, z, step=3)
     X, D = np.meshgrid(x, z)
     want = ref(X, D)
     exact = np.ones(100, bool)
@@ -113,3 +113,19 @@ def test_reference_points_interpolate_smooth_maps_and_keep_jumps():
     for r in (49, 50):
         assert min(abs(y0[r, 0] - want[1][r, 0]), abs(y0[r, 0] - want[1][r, 0] + 30.0)) < 0.2
     np.testing.assert_array_equal(unit[np.abs(z - 80.0) > 3.0], want[2][np.abs(z - 80.0) > 3.0])
+
+
+def test_hold_small_steps_drops_drifts_below_the_tolerance_only():
+    rng = np.random.default_rng(1)
+    beds = np.repeat(rng.uniform(2000.0, 4000.0, 20), 10)          # 20 beds of 10 points
+    drift = 1.0 + 2e-5 * np.arange(beds.size)                       # a slow drift in each
+    vp = np.stack([beds * drift, beds], axis=1)
+    rho = 310.0 * vp ** 0.25
+    held_vp, held_rho = vp.copy(), rho.copy()
+    hold_small_steps(held_vp, held_rho, 1e-4)
+    assert np.abs(held_vp / vp - 1).max() <= 1e-4 and np.abs(held_rho / rho - 1).max() <= 1e-4
+    # 199 changes before; after: the 19 bed boundaries and one drift step per 10-point bed
+    # (the drift reaches 1e-4 after 5 points)
+    assert np.count_nonzero(np.diff(vp[:, 0])) == 199
+    assert np.count_nonzero(np.diff(held_vp[:, 0])) <= 40
+    np.testing.assert_array_equal(held_vp[:, 1], vp[:, 1])          # no drift: unchanged
