@@ -22,9 +22,10 @@ from demseis.generator.layout import (array_dtypes, grid_of, param_codes, param_
                                       sample_shape, time_axis_of)
 from demseis.generator.runsetup import property_model_of
 from demseis.generator.sampling import Render, RunSpec
-from demseis.generator.survey import (coarse_velocity, hold_small_steps, reference_points, damage_factor, fill_gaps,
-                                      fine_depths, labels_at_traces, nearest_columns, on_grid,
-                                      substeps, to_time, trace_spacing, trace_x)
+from demseis.generator.survey import (coarse_velocity, damage_factor, fill_gaps, fine_depths,
+                                      hold_small_steps, labels_at_traces, nearest_columns,
+                                      on_grid, reference_points, substeps, to_time,
+                                      trace_spacing, trace_x)
 from demseis.labels import sample_facts
 from demseis.schema import SAMPLE_ARRAYS, engine_labels
 from demseis.seismic import add_noise, imaged_sections, imaging_mode, strata_properties

@@ -23,9 +23,11 @@ rasterised: the paper's mode). ``rendering = "strata"`` images a fine stratigrap
 1. the engine maps every point of a trace, at a vertical step of at most ``strata_dz_m``
    (an odd number of steps per grid cell, so the cell centres are points), back to its
    reference coordinates (:attr:`demseis.generator.engines.State.reference`: where the rock
-   there was before it moved, or where it was deposited);
+   there was before it moved, or where it was deposited), evaluated every
+   ``REFERENCE_STEP`` points and interpolated between (:func:`reference_points`);
 2. the run's beds (:mod:`demseis.seismic.strata`, drawn once per run around the properties
-   of its mechanical layers) give Vp and density there;
+   of its mechanical layers) give Vp and density there (:func:`fill_gaps` where there is no
+   rock; drifts below ``HOLD_TOL`` held, :func:`hold_small_steps`);
 3. the fault zones change the impedance by ``fault_zone_impedance`` times the damage label
    over 2 (the core 1, the damage zone 1/2), split evenly between Vp and density;
 4. the fine columns are imaged like any property grid (one reflection per fine interface at
@@ -205,11 +207,6 @@ def coarse_velocity(vp_fine: np.ndarray, n: int) -> np.ndarray:
 def damage_factor(damage: np.ndarray, change: float) -> np.ndarray:
     """Impedance factor ``1 + change * damage / 2`` of each point (damage 0, 1 or 2)."""
     return 1.0 + float(change) * np.asarray(damage, dtype=np.float64) / 2.0
-
-
-def cell_rows(fine: np.ndarray, n: int) -> np.ndarray:
-    """The fine rows at the grid cells' centres (``n`` odd steps per cell)."""
-    return fine[..., n // 2::n, :]
 
 
 def to_time(maps: Mapping[str, np.ndarray], vp: np.ndarray, cell_m: float, t_s: np.ndarray,
