@@ -3,7 +3,9 @@
 A run builds a layered assembly (:func:`demseis.dem.build_assembly`) and faults it by moving
 its basement (:func:`demseis.dem.simulate`); each particle snapshot becomes a state: rock
 properties per element, rasterised to the grid (:mod:`demseis.seismic`), and the labels from
-the element displacements (:func:`demseis.labels.label_maps`).
+the element displacements (:func:`demseis.labels.label_maps`). For the ``strata`` rendering a
+state also carries the reference map of its snapshot (:func:`demseis.dem.reference_map`) and
+the run's beds (:func:`dem_strata`).
 """
 
 from __future__ import annotations

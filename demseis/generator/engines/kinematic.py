@@ -28,6 +28,10 @@ noise and storage every engine shares (:mod:`demseis.generator.render`):
   above and below the section so that every cell holds rock); ``strain`` is 0 (no strain field
   without particles).
 
+For the ``strata`` rendering each state's reference map is :func:`unfault` (exact: where
+each point's rock was before the faults and folds moved it) and the beds are drawn in the
+run's layer stack (:func:`kinematic_strata`).
+
 There are no particles: the store's ``particles/`` group stays empty.
 """
 
