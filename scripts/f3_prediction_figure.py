@@ -26,18 +26,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from _field import ATTRIBUTION, FIELD, ROOT  # noqa: E402  (scripts/_field.py)
 
-ROOT = Path(__file__).resolve().parents[1]
-FIELD = ROOT.parent / "shared" / "field" / "f3_inline.sgy"
-ATTRIBUTION = ("F3 Netherlands data courtesy of dGB Earth Sciences, CC BY-SA 3.0; "
-               "this figure is CC BY-SA 3.0")
+from demseis.evaluation.segyfile import read_segy_section  # noqa: E402
 
 
-def read_sgy(path: Path) -> np.ndarray:
-    import segyio  # lazy: only this figure reads SEG-Y
-
-    with segyio.open(str(path), ignore_geometry=True) as f:
-        return np.stack([np.asarray(t, dtype=np.float64) for t in f.trace]).T
 
 
 def main() -> None:
@@ -51,10 +44,10 @@ def main() -> None:
     titles = args.title or [p.name for p in args.predictions]
     if len(titles) != len(args.predictions):
         raise SystemExit("give one --title per prediction")
-    sec = read_sgy(args.field)
+    sec = read_segy_section(args.field)
     probs = []
     for path in args.predictions:
-        prob = np.squeeze(np.load(path) if path.suffix == ".npy" else read_sgy(path))
+        prob = np.squeeze(np.load(path) if path.suffix == ".npy" else read_segy_section(path))
         if prob.shape != sec.shape:
             raise SystemExit(f"{path}: prediction shape {prob.shape} is not the section's "
                              f"{sec.shape}")

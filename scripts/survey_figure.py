@@ -21,20 +21,13 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from _field import ATTRIBUTION, FIELD, ROOT  # noqa: E402  (scripts/_field.py)
+
+from demseis.evaluation.segyfile import read_segy_section  # noqa: E402
 
 from demseis.datasets import open_store, read_sample  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-FIELD = ROOT.parent / "shared" / "field" / "f3_inline.sgy"
-ATTRIBUTION = ("F3 Netherlands data courtesy of dGB Earth Sciences, CC BY-SA 3.0; "
-               "this figure is CC BY-SA 3.0")
 
-
-def read_field(path: Path) -> np.ndarray:
-    import segyio  # lazy: only this figure reads SEG-Y
-
-    with segyio.open(str(path), ignore_geometry=True) as f:
-        return np.stack([np.asarray(t, dtype=np.float64) for t in f.trace]).T
 
 
 def pick(store: Path, sample: int, freq: float) -> tuple[np.ndarray, np.ndarray, int]:
@@ -57,7 +50,7 @@ def main() -> None:
     ap.add_argument("--field", type=Path, default=FIELD)
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "figures" / "survey_f3.png")
     args = ap.parse_args()
-    panels = [("F3 inline (field, 4 ms, 25 m traces)", read_field(args.field), None)]
+    panels = [("F3 inline (field, 4 ms, 25 m traces)", read_segy_section(args.field), None)]
     for engine in ("dem", "kinematic"):
         for rendering in ("elements", "strata"):
             store = args.stores / f"{engine}_{rendering}.zarr"

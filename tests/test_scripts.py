@@ -24,3 +24,36 @@ def test_seismic_figures_render(tmp_path):
     figures.properties_figure(snaps[-1], grid, tmp_path / "b.png", "toy")
     figures.tuning_figure(tmp_path / "c.png")
     assert all((tmp_path / n).stat().st_size > 10_000 for n in ("a.png", "b.png", "c.png"))
+
+
+FIELD = Path(__file__).resolve().parents[2] / "shared" / "field" / "f3_inline.sgy"
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not FIELD.is_file(), reason="needs ../shared/field/f3_inline.sgy")
+def test_field_figures_render(tmp_path):
+    """scripts/survey_figure.py on two small survey-sampled stores and
+    scripts/f3_prediction_figure.py on a made-up prediction: both draw F3 beside them."""
+    import json
+    import subprocess
+    import sys
+
+    from tests.generator._helpers import generate_tiny
+
+    for rendering in ("elements", "strata"):
+        toml = ('[sweep]\nn_runs = 1\nsnr_db = inf\n[model]\nengine = "kinematic"\n'
+                f'[output]\ndomain = "time"\ndt_s = 0.004\ntrace_spacing_m = 25.0\n'
+                f'rendering = "{rendering}"\n')
+        generate_tiny(tmp_path, toml, f"kinematic_{rendering}")
+    root = Path(__file__).resolve().parents[1]
+    env = {"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"}
+    subprocess.run([sys.executable, str(SCRIPTS / "survey_figure.py"), str(tmp_path),
+                    "--freq", "30", "--out", str(tmp_path / "s.png")], check=True, env=env)
+    prob = np.zeros((222, 440), np.float32)
+    prob[:, 200] = 0.9                                   # one trace of 440: 0.23 %
+    np.save(tmp_path / "p.npy", prob)
+    out = subprocess.run([sys.executable, str(SCRIPTS / "f3_prediction_figure.py"),
+                          str(tmp_path / "p.npy"), "--out", str(tmp_path / "p.png")],
+                         check=True, env=env, capture_output=True, text=True).stdout
+    assert json.loads(out)["share_above_0.5"][str(tmp_path / "p.npy")] == 0.0023
+    assert (tmp_path / "s.png").stat().st_size > 20_000 and (tmp_path / "p.png").stat().st_size > 20_000
