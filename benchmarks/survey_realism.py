@@ -36,6 +36,7 @@ from demseis.datasets import open_store, read_sample
 from demseis.evaluation.realism import (adjacent_trace_correlation, expected_lags,
                                         horizon_roughness, intact_mask, offset_agreement,
                                         spectral_slope, zero_crossings)
+from demseis.evaluation.segyfile import read_segy_section
 from demseis.generator.config import load_config
 from demseis.generator.engines import get_engine
 from demseis.generator.render import imaging_input, labels_at_traces, state_maps
@@ -141,10 +142,7 @@ def snapshot_measures(cfg_path: Path, engine: str, rendering: str, repeats: int 
 
 
 def field_measures(path: Path) -> list[dict]:
-    import segyio  # lazy: only the field section needs it
-
-    with segyio.open(str(path), ignore_geometry=True) as f:
-        sec = np.stack([np.asarray(t, dtype=np.float64) for t in f.trace]).T
+    sec = read_segy_section(path).astype(np.float64)
     return [{"measure": "adjacent_trace_correlation", "engine": "field F3", "median":
              round(adjacent_trace_correlation(sec), 4)},
             {"measure": "zero_crossings", "engine": "field F3", "median": round(zero_crossings(sec), 2)},

@@ -235,7 +235,8 @@ def reference_coordinates(cur_xy: np.ndarray, radius: np.ndarray, maps: np.ndarr
 def reference_map(snapshots: Sequence, k: int, points_xy: np.ndarray, *,
                   fit_radius_m: float | None = None, tol_m: float | None = None,
                   strain_tol: float = 0.02, reach: float = 1.5, support: float = 2.0,
-                  agree_tol_m: float | None = None) -> ReferenceMap:
+                  agree_tol_m: float | None = None,
+                  displacement: tuple[np.ndarray, np.ndarray] | None = None) -> ReferenceMap:
     """Reference coordinates of points of snapshot ``k`` of a run, with their owner's unit.
 
     The reference of every element is where it first appears in ``snapshots[: k + 1]``
@@ -250,6 +251,8 @@ def reference_map(snapshots: Sequence, k: int, points_xy: np.ndarray, *,
     points_xy : (m, 2) query points (m).
     fit_radius_m, tol_m, strain_tol : see :func:`element_maps`.
     reach, support, agree_tol_m : see :func:`reference_coordinates`.
+    displacement : snapshot ``k``'s entry of ``displacement_history(snapshots)``, where the
+        caller has it already (it is computed from ``snapshots[: k + 1]`` otherwise).
 
     Returns
     -------
@@ -260,7 +263,8 @@ def reference_map(snapshots: Sequence, k: int, points_xy: np.ndarray, *,
             or not -len(snaps) <= k < len(snaps):
         raise InputError(f"k = {k!r}; allowed: an integer index into {len(snaps)} snapshots")
     k = int(k) % len(snaps)
-    disp, birth = displacement_history(snaps[: k + 1])[k]
+    disp, birth = (displacement if displacement is not None
+                   else displacement_history(snaps[: k + 1])[k])
     s = snaps[k]
     cur = np.asarray(s.xy, dtype=np.float64)
     maps = element_maps(cur - disp, cur, s.radius, fit_radius_m=fit_radius_m, tol_m=tol_m,

@@ -22,13 +22,14 @@ from demseis.generator.layout import (array_dtypes, grid_of, param_codes, param_
                                       sample_shape, time_axis_of)
 from demseis.generator.runsetup import property_model_of
 from demseis.generator.sampling import Render, RunSpec
-from demseis.generator.survey import (coarse_velocity, damage_factor, fill_gaps, fine_depths,
-                                      hold_small_steps, labels_at_traces, nearest_columns,
-                                      on_grid, reference_points, substeps, to_time,
-                                      trace_spacing, trace_x)
+from demseis.generator.survey import (damage_factor, fill_gaps, fine_depths, hold_small_steps,
+                                      labels_at_traces, nearest_columns, on_grid,
+                                      reference_points, substeps, to_time, trace_spacing,
+                                      trace_x)
 from demseis.labels import sample_facts
 from demseis.schema import SAMPLE_ARRAYS, engine_labels
-from demseis.seismic import add_noise, imaged_sections, imaging_mode, strata_properties
+from demseis.seismic import (add_noise, coarse_velocity, imaged_sections, imaging_mode,
+                             strata_properties)
 from demseis.types import Snapshot
 
 
@@ -116,9 +117,8 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
     impedance = img.impedance
     if t_s is not None:
         fills = {name: SAMPLE_ARRAYS.get(name).fill for name in [*maps, "impedance"]}
-        maps = to_time(maps, img.vp_cell, grid.cell_m, t_s, fills)
-        impedance = to_time({"impedance": impedance}, img.vp_cell, grid.cell_m, t_s,
-                            fills)["impedance"]
+        maps = to_time({**maps, "impedance": impedance}, img.vp_cell, grid.cell_m, t_s, fills)
+        impedance = maps.pop("impedance")
     rendered = {"impedance": impedance}
     codes = param_codes()
     for r in renders:

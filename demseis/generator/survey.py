@@ -44,11 +44,18 @@ import numpy as np
 from demseis.generator import _survey_kernels as _k
 from demseis.generator.config import Config
 from demseis.seismic import depth_to_time
+from demseis.types import Grid
 
 #: relative change of Vp and density down a trace below which no reflection is made
 HOLD_TOL = 1e-4
 #: priority of a label pixel when a trace's footprint holds several grid cells
 _FAULT_PRIORITY = 4
+
+
+def _grid(cfg: Config) -> Grid:
+    """The sweep's raster grid (as :func:`demseis.generator.layout.grid_of`, which imports this
+    module)."""
+    return Grid.covering(cfg.model.width_m, cfg.model.height_m, cfg.grid.cell_m)
 
 
 def trace_spacing(cfg: Config) -> float:
@@ -73,7 +80,7 @@ def footprint_columns(cfg: Config) -> list[np.ndarray]:
     """Per trace, the grid columns whose centres lie in its footprint (the nearest column when
     none does: traces closer than the cells)."""
     cell = float(cfg.grid.cell_m)
-    nx = max(1, int(math.floor(cfg.model.width_m / cell + 1e-9)))
+    nx = _grid(cfg).nx
     dx = trace_spacing(cfg)
     centres = (np.arange(nx) + 0.5) * cell
     out = []
@@ -88,8 +95,7 @@ def footprint_columns(cfg: Config) -> list[np.ndarray]:
 def nearest_columns(cfg: Config) -> np.ndarray:
     """(ntr,) the grid column under each trace."""
     cell = float(cfg.grid.cell_m)
-    nx = max(1, int(math.floor(cfg.model.width_m / cell + 1e-9)))
-    return np.minimum(nx - 1, (trace_x(cfg) // cell).astype(np.int64))
+    return np.minimum(_grid(cfg).nx - 1, (trace_x(cfg) // cell).astype(np.int64))
 
 
 def labels_at_traces(cfg: Config, maps: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -194,14 +200,6 @@ def hold_small_steps(vp: np.ndarray, rho: np.ndarray, tol: float = HOLD_TOL) -> 
     tilted bed (a few 1e-4 per step); dropping those drifts costs at most ``tol`` of any value
     and lets the convolution skip three of four zero spikes (demseis.seismic.forward)."""
     _k.hold_small_steps(vp, rho, float(tol))
-
-
-def coarse_velocity(vp_fine: np.ndarray, n: int) -> np.ndarray:
-    """(nz, ntr) interval velocity of each grid cell from its ``n`` fine steps (harmonic
-    mean: the cell's two-way time is the sum of its steps')."""
-    nzf, ntr = vp_fine.shape
-    slow = (1.0 / vp_fine).reshape(nzf // n, n, ntr).mean(axis=1)
-    return 1.0 / slow
 
 
 def damage_factor(damage: np.ndarray, change: float) -> np.ndarray:

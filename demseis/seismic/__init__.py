@@ -18,6 +18,7 @@ See ``docs/seismic.md`` for the physics, conventions and measured accuracy and s
 """
 
 from demseis.seismic.forward import (
+    coarse_velocity,
     convolve,
     depth_to_time,
     impedance,
@@ -44,7 +45,7 @@ from demseis.seismic.wavelet import ricker
 __all__ = [
     "rasterise", "ricker", "reflectivity", "impedance", "convolve", "PropertyModel",
     "LayerProperties", "draw_layer_properties", "element_properties", "property_grids", "smooth",
-    "synthetic_sections", "interface_times", "time_axis", "depth_to_time", "add_noise", "rms",
-    "snr_db", "psf_sections", "imaged_sections", "ImagingMode", "imaging_mode", "BedModel",
+    "synthetic_sections", "interface_times", "coarse_velocity", "time_axis", "depth_to_time",
+    "add_noise", "rms", "snr_db", "psf_sections", "imaged_sections", "ImagingMode", "imaging_mode", "BedModel",
     "Strata", "draw_strata", "strata_properties",
 ]

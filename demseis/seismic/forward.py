@@ -154,6 +154,13 @@ def _live_spikes(t_spike: np.ndarray, amp: np.ndarray) -> tuple[np.ndarray, np.n
     return np.ascontiguousarray(t), np.ascontiguousarray(a)
 
 
+def coarse_velocity(vp: np.ndarray, n: int) -> np.ndarray:
+    """The interval velocity of cells made of ``n`` consecutive rows of ``vp`` (rows, cols):
+    the harmonic mean of the rows', so a cell's two-way time is the sum of its rows'."""
+    v = np.asarray(vp, dtype=np.float64)
+    return 1.0 / (1.0 / v).reshape(v.shape[0] // n, n, v.shape[1]).mean(axis=1)
+
+
 def interface_times(vp_g: np.ndarray, cell_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Two-way times of cell bottoms and cell centres below the grid top.
 

@@ -80,7 +80,8 @@ import numpy as np
 
 from demseis.errors import InputError
 from demseis.seismic import _kernels
-from demseis.seismic.forward import _check_grids, interface_times, synthetic_sections
+from demseis.seismic.forward import (_check_grids, coarse_velocity, interface_times,
+                                     synthetic_sections)
 from demseis.seismic.wavelet import _check_freqs, ricker_half_width_s
 
 # scipy.fft is imported inside the functions that use it: it takes ~0.2 s to import, only PSF
@@ -407,7 +408,7 @@ def psf_sections(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
     sections = synthetic_sections(vp_g, rho_g, cell_m, freqs_hz, domain, t_s=t_s,
                                   rows_per_cell=n)
     if n > 1:        # the plan of the output cells: n rows each, two-way time kept
-        vp = 1.0 / (1.0 / vp).reshape(vp.shape[0] // n, n, vp.shape[1]).mean(axis=1)
+        vp = coarse_velocity(vp, n)
     plan = psf_plan(vp, cell_m * n, freqs_hz, max_angle_deg, domain, t_s=t_s,
                     aperture_m=aperture_m, taper_deg=taper_deg, n_windows=n_windows,
                     col_step_m=cell_m if col_step_m is None else col_step_m)

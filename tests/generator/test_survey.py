@@ -5,11 +5,10 @@ from __future__ import annotations
 import numpy as np
 from demseis.generator.config import parse_config
 from demseis.generator.layout import sample_shape
-from demseis.generator.survey import (coarse_velocity, damage_factor, fill_gaps,
-                                      hold_small_steps, reference_points,
-                                      fine_depths, labels_at_traces, on_grid, substeps,
+from demseis.generator.survey import (damage_factor, fill_gaps, fine_depths, hold_small_steps,
+                                      labels_at_traces, on_grid, reference_points, substeps,
                                       trace_spacing, trace_x)
-from demseis.seismic import interface_times
+from demseis.seismic import coarse_velocity, interface_times
 
 
 def _cfg(**output):

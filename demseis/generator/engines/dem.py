@@ -131,27 +131,32 @@ class DemEngine:
         n_layers_total = max(int(s.layer.max()) for s in snaps) + 1
         layer_props, elem_seed = run_properties(cfg, run.spec.run, model, n_layers_total)
         history = strain_history(snaps, cfg.labels)
-        disp = displacement_history(snaps) if cfg.labels.method == "slip_trace" \
-            else [None] * len(snaps)
         strata = None
+        moves = None      # displacement history: the slip-trace labels and the strata need it
+        if cfg.labels.method == "slip_trace" or cfg.output.rendering == "strata":
+            moves = displacement_history(snaps)
         if cfg.output.rendering == "strata":
-            strata = dem_strata(cfg, run, snaps, layer_props)
+            strata = dem_strata(cfg, run, snaps, layer_props, moves)
         for k in snapshots:
             snap = snaps[k]
             vp_e, rho_e = element_properties(snap.ids, snap.layer, layer_props, model, elem_seed)
             vp_g, rho_g = property_grids(snap.xy, snap.radius, vp_e, rho_e, snap.layer, grid, model)
-            labels = label_maps(snap, history[k], grid, cfg.labels, displacement=disp[k])
+            labels = label_maps(snap, history[k], grid, cfg.labels,
+                                displacement=moves[k] if cfg.labels.method == "slip_trace"
+                                else None)
             values = {"step": snap.step, "throw_m": snap.throw_m, "n_elements": snap.n,
                       **run.info.throws_at(k, len(snaps))}
-            reference = None if strata is None else partial(_reference, snaps, k, grid.top_m)
+            reference = None if strata is None else partial(_reference, snaps, k, moves[k],
+                                                            grid.top_m)
             yield State(snapshot=k, vp_m_s=vp_g, rho_kg_m3=rho_g, labels=labels, values=values,
                         reference=reference, strata=strata)
 
 
-def dem_strata(cfg: Config, run: EngineRun, snaps: Sequence[Snapshot],
-               props: LayerProperties) -> Strata:
+def dem_strata(cfg: Config, run: EngineRun, snaps: Sequence[Snapshot], props: LayerProperties,
+               moves: Sequence[tuple[np.ndarray, np.ndarray]]) -> Strata:
     """The beds of a DEM run: its pre-kinematic layers (the thicknesses the assembly was
-    built with), then each growth layer over the reference y its elements were deposited at."""
+    built with), then each growth layer over the reference y its elements were deposited at
+    (``moves``: :func:`demseis.labels.displacement_history` of ``snaps``)."""
     p = run.spec.params
     n = int(p["n_layers"])
     H = cfg.model.height_m
@@ -164,7 +169,7 @@ def dem_strata(cfg: Config, run: EngineRun, snaps: Sequence[Snapshot],
     n_total = int(props.vp.size)
     lo = np.full(n_total - n, np.inf)
     hi = np.full(n_total - n, -np.inf)
-    for s, (d, _) in zip(snaps, displacement_history(snaps)):
+    for s, (d, _) in zip(snaps, moves):
         grown = s.deposited & (s.layer >= n)
         if not grown.any():
             continue
@@ -178,13 +183,15 @@ def dem_strata(cfg: Config, run: EngineRun, snaps: Sequence[Snapshot],
                       np.concatenate([top, hi]), props, n_prekinematic=n)
 
 
-def _reference(snaps: Sequence[Snapshot], k: int, top_m: float, x_m: np.ndarray,
+def _reference(snaps: Sequence[Snapshot], k: int, move: tuple[np.ndarray, np.ndarray],
+               top_m: float, x_m: np.ndarray,
                depth_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:attr:`State.reference` of snapshot ``k``: :func:`demseis.dem.reference_map`; a point
+    """:attr:`State.reference` of snapshot ``k`` (``move``: its displacement since each
+    element's first appearance, and that snapshot): :func:`demseis.dem.reference_map`; a point
     in a growth element is looked up in that element's growth unit."""
     x = np.asarray(x_m, dtype=np.float64)
     pts = np.stack([x.ravel(), top_m - np.asarray(depth_m, dtype=np.float64).ravel()], axis=1)
-    ref = reference_map(snaps, k, pts)
+    ref = reference_map(snaps, k, pts, displacement=move)
     unit = np.where(ref.deposited, ref.layer.astype(np.int64), -1).reshape(x.shape)
     return ref.ref_xy[:, 0].reshape(x.shape), ref.ref_xy[:, 1].reshape(x.shape), unit
 
