@@ -208,6 +208,11 @@ _DECLARED: tuple[Param, ...] = (
        doc="mechanical stratigraphy: cohesion ratio of strong (sandstone, limestone) to weak "
            "(shale) layers, which are also up to 4x softer and have up to half the friction; "
            "1 = uniform mechanics (demseis.dem.strata)"),
+    _p("base_stretch", float, "run", 0.0, -0.3, 0.3,
+       doc="distributed extension (> 0) or shortening (< 0) of the model base, as a fraction of "
+           "the width: the base stretches like a rubber sheet under the cover (0 = off); the "
+           "DEM grows a fault population above it, the kinematic engine draws one that takes up "
+           "the same extension"),
     # ---- per run: the kinematic engine only ([model] engine = "kinematic") ----------------
     _p("fold_amplitude_m", float, "run", 0.0, 0.0, 1.0e4, unit="m",
        doc="kinematic engine: amplitude of the folding of the layers before faulting (0 = flat)"),
@@ -217,6 +222,12 @@ _DECLARED: tuple[Param, ...] = (
        doc="kinematic engine: how far the throw dies out along the fault: throw(s) = throw_m "
            "(1 - taper (s/L)^2) at distance s from the fault's centre of half-length L "
            "(0 = constant throw, 1 = zero at the tips)"),
+    _p("population_faults", int, "run", 12, 1, 100,
+       doc="kinematic engine: faults of the population that takes up base_stretch (the DEM "
+           "grows its own)"),
+    _p("population_throw_exponent", float, "run", 1.0, 0.3, 3.0,
+       doc="kinematic engine: the population's throws follow a power law, cumulative number "
+           "N(> t) ~ t^-c with c this exponent (larger: more small faults)"),
     # ---- per run: layering ---------------------------------------------------------------
     _p("n_layers", int, "run", 48, 1, 250, doc="number of pre-kinematic layers"),
     _p("layer_thickness_cv", float, "run", 0.0, 0.0, 0.9,

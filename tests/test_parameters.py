@@ -102,7 +102,10 @@ GENERATOR_ONLY = {"seed", "n_runs", "renders_per_snapshot", "fault_x_frac", "n_l
                   # FaultSystem / per-layer materials, whose own checks are wider
                   "n_faults", "fault_spacing_frac", "listric_radius_m", "strength_contrast",
                   # the kinematic engine's geometry (demseis.generator.engines.kinematic)
-                  "fold_amplitude_m", "throw_taper",
+                  "fold_amplitude_m", "throw_taper", "population_faults",
+                  "population_throw_exponent",
+                  # distributed extension (the DEM's stretching base, the kinematic population)
+                  "base_stretch",
                   # survey sampling and the strata rendering (demseis.generator.survey)
                   "trace_spacing_m", "strata_dz_m", "fault_zone_impedance"}
 NUMERIC = sorted(k for k, p in PARAMS.items() if p.kind in (int, float))

@@ -295,17 +295,25 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
 #: ``[output]`` keys added after stores were written, and the value that reproduces the bytes
 #: of a store whose config lacks them
 _STORED_DEFAULTS = {"rendering": "elements"}
+#: likewise for ``[labels]`` keys (a store written before the picked fault target drew its
+#: traces)
+_STORED_LABEL_DEFAULTS = {"fault_style": "traces"}
 
 
 def stored_config(raw: dict[str, Any], *, source: str = "store config") -> Config:
     """The config of an existing store (its ``config`` attribute): a key the store's version did
     not know takes the value that reproduces its bytes (a store written before the ``strata``
-    rendering was rendered from elements), then :func:`parse_config`."""
+    rendering was rendered from elements, and drew its faults as traces), then
+    :func:`parse_config`."""
     raw = dict(raw)
     output = dict(raw.get("output", {}))
     for key, value in _STORED_DEFAULTS.items():
         output.setdefault(key, value)
     raw["output"] = output
+    labels = dict(raw.get("labels", {}))
+    for key, value in _STORED_LABEL_DEFAULTS.items():
+        labels.setdefault(key, value)
+    raw["labels"] = labels
     return parse_config(raw, source=source)
 
 

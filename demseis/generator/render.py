@@ -26,7 +26,7 @@ from demseis.generator.survey import (damage_factor, fill_gaps, fine_depths, hol
                                       labels_at_traces, nearest_columns, on_grid,
                                       reference_points, substeps, to_time, trace_spacing,
                                       trace_x)
-from demseis.labels import sample_facts
+from demseis.labels import pick_faults, sample_facts, throw_samples
 from demseis.schema import SAMPLE_ARRAYS, engine_labels
 from demseis.seismic import (add_noise, coarse_velocity, imaged_sections, imaging_mode,
                              strata_properties)
@@ -98,7 +98,6 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
     grid = grid_of(cfg)
     t_s = time_axis_of(cfg)
     maps = labels_at_traces(cfg, state_maps(state, arrays))
-    facts = sample_facts(maps)
     img = imaging_input(cfg, state, maps, run.spec.params)
     domain = "depth" if t_s is None else "time"
     # one imaging call per (mode, options key), all its frequencies at once; the first render
@@ -115,10 +114,15 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
                                **first.values)
         images.update({(key, f): sec for f, sec in zip(freqs, secs)})
     impedance = img.impedance
+    vp = img.vp_cell
     if t_s is not None:
         fills = {name: SAMPLE_ARRAYS.get(name).fill for name in [*maps, "impedance"]}
-        maps = to_time({**maps, "impedance": impedance}, img.vp_cell, grid.cell_m, t_s, fills)
-        impedance = maps.pop("impedance")
+        maps = to_time({**maps, "impedance": impedance, _VP: vp}, img.vp_cell, grid.cell_m, t_s,
+                       {**fills, _VP: 0.0})
+        impedance, vp = maps.pop("impedance"), maps.pop(_VP)
+    if cfg.labels.fault_style == "picks":
+        maps = output_picks(cfg, maps, vp)
+    facts = sample_facts(maps)
     rendered = {"impedance": impedance}
     codes = param_codes()
     for r in renders:
@@ -135,6 +139,24 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
             if key in codes:
                 value = codes[key].index(value)
             params[key][i] = value
+
+
+#: the interval-velocity map's key while it is taken to time with the labels
+_VP = "_vp_m_s"
+
+
+def output_picks(cfg: Config, maps: Mapping[str, np.ndarray], vp_m_s: np.ndarray,
+                 ) -> dict[str, np.ndarray]:
+    """``maps`` (on the output grid) with their faults drawn as picks
+    (:func:`demseis.labels.picks.pick_faults`), the throw in output samples taken from the
+    output grid's sampling: depth cells, or the two-way time through ``vp_m_s``."""
+    t_s = time_axis_of(cfg)
+    if t_s is None:
+        throw = throw_samples(maps["slip_m"], maps["dip_deg"], cell_m=grid_of(cfg).cell_m)
+    else:
+        throw = throw_samples(maps["slip_m"], maps["dip_deg"], vp_m_s=vp_m_s,
+                              dt_s=float(cfg.output.dt_s))
+    return pick_faults(maps, throw, cfg.labels.picks())
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,7 @@ from demseis.generator.config import Config, stored_config
 from demseis.generator.engines import get_engine, require_particles, run_from_particles
 from demseis.generator.render import render_run
 from demseis.generator.sampling import plan_run
+from demseis.labels import LabelConfig
 from demseis.generator.sweep import SweepSummary, _progress_bar, prepare_store
 
 
@@ -78,7 +79,8 @@ def relabel_config(source_cfg: dict[str, Any], labels: dict[str, Any]) -> Config
     """The source config with its ``[labels]`` table replaced (everything else unchanged, so
     the same runs, renders and noise seeds give byte-identical seismic)."""
     raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in source_cfg.items()}
-    raw["labels"] = dict(labels)
+    # keys not given take today's defaults (the picked fault target), not the source's
+    raw["labels"] = {k: getattr(LabelConfig(), k) for k in ("fault_style",)} | dict(labels)
     return stored_config(raw, source="relabel config")
 
 

@@ -10,6 +10,7 @@ Seed tree (spawn keys under the sweep seed; the second key is one of the named c
     (run, SEED_LAYERS)               layer thicknesses (``layer_thickness_cv > 0``)
     (run, SEED_FAULTS)               placement of a fault system (``structure != "single"``)
     (run, SEED_STRATA)               the beds of the ``strata`` rendering
+    (run, SEED_POPULATION)           the kinematic engine's fault population (``base_stretch``)
 
 A run's values depend only on the sweep seed and the run index, never on worker count or order.
 """
@@ -33,6 +34,7 @@ SEED_RENDER = 3
 SEED_LAYERS = 4
 SEED_FAULTS = 6
 SEED_STRATA = 7
+SEED_POPULATION = 8
 
 
 def seed_sequence(cfg: Config, *key: int) -> np.random.SeedSequence:

@@ -12,6 +12,8 @@ Public API (see docs/labels.md)::
     # fault, damage, strain, layer, fault_id, slip_m, dip_deg, sense (demseis.schema's
     # engine labels)
     facts = sample_facts(maps)                               # has_fault, n_faults, max_slip_m
+    picked = pick_faults(maps, throw_samples(maps["slip_m"], maps["dip_deg"], cell_m=10.0))
+    # the fault arrays redrawn as an interpreter picks: one smooth 1-pixel line per fault
 
 Shared Numba helper: :func:`build_cell_list` (a cell list of points, callable from other
 stages' kernels).
@@ -21,7 +23,8 @@ Shape measures of label masks (diagnostics): :func:`loop_count`, :func:`rung_fra
 
 Modules: ``maps`` (label_maps), ``raster`` (elements to grid), ``traces`` (the
 ``"slip_trace"`` method: ``crest``, ``slip``, ``linking``, ``core``, with ``direction``),
-``targets`` (per-pixel targets of traces), ``strain_band`` (the ``"strain_band"`` method),
+``targets`` (per-pixel targets of traces), ``picks`` (the picked
+fault target on the output grid), ``strain_band`` (the ``"strain_band"`` method),
 ``masks`` and ``centreline`` (mask tools), ``measures``, ``strain``, ``config``, ``_kernels``.
 """
 
@@ -34,6 +37,7 @@ from demseis.labels.measures import (
     rung_fraction,
     skeleton_length_cells,
 )
+from demseis.labels.picks import PickConfig, pick_faults, throw_samples
 from demseis.labels.raster import rasterise_strain
 from demseis.labels.slip import displacement_history
 from demseis.labels.strain import (
@@ -48,6 +52,7 @@ from demseis.labels.traces import Traces, slip_traces
 
 __all__ = [
     "LabelConfig",
+    "PickConfig",
     "StrainResult",
     "StrainState",
     "Traces",
@@ -58,6 +63,7 @@ __all__ = [
     "fault_mask",
     "label_maps",
     "loop_count",
+    "pick_faults",
     "mask_thickness_cells",
     "neighbour_lists",
     "rasterise_strain",
@@ -67,4 +73,5 @@ __all__ = [
     "slip_traces",
     "strain_history",
     "thin_and_dilate",
+    "throw_samples",
 ]

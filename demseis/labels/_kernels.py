@@ -513,3 +513,39 @@ def sample_profiles(u_row, u_col, rock, rows, cols, n_row, n_col, ts, out):
             else:
                 out[q, a, 0] = np.nan
                 out[q, a, 1] = np.nan
+
+
+@njit(cache=True)
+def thin_path(rows, cols):
+    """Which pixels of an ordered digital path to keep so that it is one pixel wide.
+
+    Parameters
+    ----------
+    rows, cols : (n,) int64 pixel coordinates in order along the path; consecutive pixels
+        are equal or 8-neighbours.
+
+    Returns
+    -------
+    (n,) bool. The kept pixels form a stack: each pixel of the path is pushed unless it
+    repeats the top, after popping the top while the pixel below the top is an 8-neighbour
+    of it (the corner of an L step, or a detour back). So the kept pixels start and end where
+    the path does, consecutive kept pixels are 8-neighbours, and no two pixels two apart
+    along the kept path touch (no corners, no pixel with two touching path neighbours).
+    """
+    n = rows.shape[0]
+    keep = np.zeros(n, dtype=np.bool_)
+    stack = np.empty(n, dtype=np.int64)
+    top = -1
+    for i in range(n):
+        if top >= 0 and rows[i] == rows[stack[top]] and cols[i] == cols[stack[top]]:
+            continue
+        while top >= 1 and abs(rows[i] - rows[stack[top - 1]]) <= 1 \
+                and abs(cols[i] - cols[stack[top - 1]]) <= 1:
+            top -= 1
+        if top >= 0 and rows[i] == rows[stack[top]] and cols[i] == cols[stack[top]]:
+            continue                                  # back at a kept pixel (a detour)
+        top += 1
+        stack[top] = i
+    for k in range(top + 1):
+        keep[stack[k]] = True
+    return keep

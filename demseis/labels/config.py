@@ -8,10 +8,12 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from demseis.errors import ConfigError
+from demseis.labels.picks import PickConfig
 
 STRAIN_MEASURES = ("total", "cumulative")
 NEIGHBOUR_METHODS = ("radius", "knn")
 FAULT_METHODS = ("slip_trace", "strain_band")
+FAULT_STYLES = ("picks", "traces")
 
 
 @dataclass(frozen=True)
@@ -83,6 +85,18 @@ class LabelConfig:
     damage_width_ratio : slip_trace: damage-zone total width as a multiple of the local slip,
         in [0, 100] (see docs/labels.md for the published data behind the default).
     damage_max_width_m : slip_trace: upper bound of the damage-zone total width (m), in [0, 1e5].
+    fault_style : how the stored ``fault`` target is drawn: ``"picks"`` (default: as an
+        interpreter picks, one smooth one-pixel polyline per fault on the output grid, only
+        where its throw is at least ``min_throw_samples``; :mod:`demseis.labels.picks`) or
+        ``"traces"`` (the method's traces taken to the output grid as they are, grown to
+        ``thickness_cells``).
+    min_throw_samples : picks: smallest throw, in output samples (time samples, or depth cells
+        of a depth-domain store), where a fault is drawn, in [0, 100].
+    pick_smooth_px : picks: Gaussian sigma (pixels along the fault) of the line, in [0, 20].
+    pick_max_gap_px : picks: gaps of a fault's pixels up to this many pixels are bridged, in
+        [0, 100].
+    pick_min_length_px : picks: pieces of a line shorter than this (pixels along the fault) are
+        dropped, in [1, 10000].
     """
 
     strain_measure: str = "cumulative"
@@ -109,6 +123,11 @@ class LabelConfig:
     core_halfwidth_cells: int = 5
     damage_width_ratio: float = 1.0
     damage_max_width_m: float = 200.0
+    fault_style: str = "picks"
+    min_throw_samples: float = 1.0
+    pick_smooth_px: float = 2.0
+    pick_max_gap_px: int = 4
+    pick_min_length_px: int = 5
 
     def validate(self) -> "LabelConfig":
         """Check every field; returns ``self`` so it chains.
@@ -149,7 +168,19 @@ class LabelConfig:
         _integer("core_halfwidth_cells", self.core_halfwidth_cells, 0, 10)
         _number("damage_width_ratio", self.damage_width_ratio, 0.0, 100.0)
         _number("damage_max_width_m", self.damage_max_width_m, 0.0, 1e5)
+        _choice("fault_style", self.fault_style, FAULT_STYLES)
+        _number("min_throw_samples", self.min_throw_samples, 0.0, 100.0)
+        _number("pick_smooth_px", self.pick_smooth_px, 0.0, 20.0)
+        _integer("pick_max_gap_px", self.pick_max_gap_px, 0, 100)
+        _integer("pick_min_length_px", self.pick_min_length_px, 1, 10_000)
         return self
+
+    def picks(self) -> PickConfig:
+        """The :class:`demseis.labels.picks.PickConfig` of these settings."""
+        return PickConfig(min_throw_samples=float(self.min_throw_samples),
+                          smooth_px=float(self.pick_smooth_px),
+                          max_gap_px=int(self.pick_max_gap_px),
+                          min_length_px=int(self.pick_min_length_px))
 
     def min_slip_for(self, cell_m: float) -> float:
         """``min_slip_m``, or one grid cell (``cell_m``) when it is not set."""

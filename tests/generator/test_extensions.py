@@ -178,7 +178,10 @@ def test_a_registered_label_array_goes_from_generate_to_the_dataset(tmp_path):
         assert stored_arrays()[-1] == "fault_wide"
         for engine in ("kinematic", "dem"):
             out = tmp_path / f"{engine}.zarr"
-            store = demseis.generate(tiny(engine=engine), out=out, workers=0)
+            raw = tiny(engine=engine)
+            # the producer reads the engine's trace label: store it as it is (not re-picked)
+            raw["labels"]["fault_style"] = "traces"
+            store = demseis.generate(raw, out=out, workers=0)
             assert validate_store(out).ok
             ds = FaultSegDataset(out, targets=("fault", "fault_wide"))
             faulted = [i for i in range(len(ds)) if store.params["has_fault"][i]]

@@ -129,3 +129,56 @@ def test_particle_commands_refuse_a_kinematic_store(kin_store, tmp_path):
         rerender(kin_store, tmp_path / "r.zarr", freqs_hz=[20.0], snrs_db=[np.inf])
     with pytest.raises(InputError, match="kinematic"):
         relabel(kin_store, tmp_path / "l.zarr", labels={"thickness_cells": 2.0})
+
+
+def _population_cfg(stretch: float, n: int = 12):
+    from demseis.generator.config import load_config, parse_config
+
+    raw = load_config(preset="quick").to_dict()
+    raw["sweep"].update(base_stretch=stretch, population_faults=n, n_runs=2)
+    raw["model"]["engine"] = "kinematic"
+    return parse_config(raw)
+
+
+@pytest.mark.parametrize("stretch", [0.08, -0.05])
+def test_population_takes_up_the_stretch(stretch):
+    from demseis.generator.engines.kinematic import population
+
+    cfg = _population_cfg(stretch, n=15)
+    for run in range(2):
+        params = plan_run(cfg, run).params
+        faults = population(cfg, params, run)
+        assert len(faults) == 15
+        heave = sum(f.throw_m / np.tan(np.radians(f.dip_deg)) for f in faults)
+        np.testing.assert_allclose(heave, abs(stretch) * cfg.model.width_m, rtol=1e-9)
+        assert {f.kind for f in faults} == {"normal" if stretch > 0 else "reverse"}
+        throws = np.array([f.throw_m for f in faults])
+        assert throws.max() <= 50.0 * throws.min() * (1 + 1e-9)       # the power law's cap
+        assert all(15.0 <= f.dip_deg <= 80.0 and f.taper == 1.0 for f in faults)
+    assert population(_population_cfg(0.0), plan_run(_population_cfg(0.0), 0).params, 0) == []
+
+
+def test_population_throws_follow_the_power_law():
+    """Cumulative N(> t) ~ t^-c: the maximum-likelihood (Hill) exponent of many faults."""
+    from demseis.generator.engines.kinematic import population
+
+    cfg = _population_cfg(0.1, n=100)
+    throws = np.concatenate([[f.throw_m for f in population(cfg, plan_run(cfg, r).params, r)]
+                             for r in range(2)])
+    t = np.sort(throws)[: int(0.9 * throws.size)]          # below the cap
+    c_hat = 1.0 / np.mean(np.log(t / t.min()))
+    assert 0.75 < c_hat < 1.35, c_hat                        # population_throw_exponent = 1
+
+
+def test_a_stretched_section_has_many_labelled_faults():
+    cfg = _population_cfg(0.1, n=12)
+    spec = plan_run(cfg, 0)
+    info = run_info(cfg, spec.params, 0)
+    _, none = kinematic_state(cfg, spec.params, 0, info, 0.0)
+    _, maps = kinematic_state(cfg, spec.params, 0, info, 1.0)
+    assert not none["fault"].any()
+    assert len(np.unique(maps["fault_id"][maps["fault"] > 0])) >= 8   # 12 + 1 less tips/overlaps
+    # without a stretch the same run has its one basement fault
+    plain = _population_cfg(0.0)
+    _, one = kinematic_state(plain, plan_run(plain, 0).params, 0, info, 1.0)
+    assert len(np.unique(one["fault_id"][one["fault"] > 0])) == 1

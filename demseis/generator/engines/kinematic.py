@@ -38,6 +38,7 @@ There are no particles: the store's ``particles/`` group stays empty.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
@@ -48,7 +49,8 @@ from demseis.generator.config import Config
 from demseis.generator.engines import EngineRun, State
 from demseis.generator.layout import grid_of
 from demseis.generator.runsetup import RunInfo, property_model_of, run_info, run_strata
-from demseis.generator.sampling import SEED_DEM, SEED_LAYERS, SEED_PROPERTIES, RunSpec, rng_at
+from demseis.generator.sampling import (SEED_DEM, SEED_LAYERS, SEED_POPULATION, SEED_PROPERTIES,
+                                       RunSpec, rng_at)
 from demseis.schema import engine_labels, sample_array
 from demseis.seismic import LayerProperties, Strata, draw_layer_properties
 
@@ -56,6 +58,16 @@ from demseis.seismic import LayerProperties, Strata, draw_layer_properties
 ABOVE, BELOW = 1.0, 1.0
 #: half-length of a fault as a fraction of the model height (the throw taper's L)
 HALF_LENGTH_FRAC = 0.6
+#: standard deviation of the dips of a population's faults around the run's dip_deg
+POPULATION_DIP_SD_DEG = 8.0
+#: share of a population's faults that dip towards the run's dip_direction
+SYNTHETIC_FRACTION = 0.7
+#: largest throw of a population over its smallest (the power law's cap)
+MAX_THROW_RATIO = 50.0
+#: range of a population fault's displacement / length ratio (log-uniform)
+DL_RATIO = (0.02, 0.1)
+#: a population fault's half-length, as fractions of the model height, at least and at most
+HALF_LENGTH_RANGE = (0.15, 1.5)
 
 
 def fault_geometry(depth_m: np.ndarray, x_base_m: float, dip_deg: float, height_m: float,
@@ -106,6 +118,94 @@ def layer_tops(n_layers: int, cv: float, height_m: float, rng: np.random.Generat
     return -ABOVE * height_m + np.concatenate([[0.0], np.cumsum(h)])
 
 
+@dataclass(frozen=True)
+class KinematicFault:
+    """One fault of the kinematic engine.
+
+    Attributes
+    ----------
+    x_m : x where the fault meets the base of the model (depth ``height_m``).
+    dip_deg : dip (at the top, for a listric fault).
+    throw_m : final throw at the fault's centre.
+    direction : +1 dips right (hanging wall at larger x), -1 left.
+    kind : ``"normal"``, ``"reverse"`` or ``"listric"``.
+    radius_m : radius of a listric fault; None: planar.
+    centre_m : depth of the fault's centre (largest throw).
+    half_length_m : distance from the centre (along depth) over which the throw tapers.
+    taper : throw(d) = throw_m (1 - taper ((d - centre) / half_length)^2), clipped at 0.
+    """
+
+    x_m: float
+    dip_deg: float
+    throw_m: float
+    direction: int
+    kind: str
+    radius_m: float | None
+    centre_m: float
+    half_length_m: float
+    taper: float
+
+
+def population(cfg: Config, params: Mapping[str, Any], run: int) -> list[KinematicFault]:
+    """The fault population that takes up ``base_stretch`` of the width, oldest first
+    (empty when ``base_stretch`` is 0).
+
+    ``population_faults`` faults, normal for extension and reverse for shortening. Each is
+    centred at a uniform x (at mid-depth) and depth (0.2-0.8 of the height), dips
+    ``N(dip_deg, POPULATION_DIP_SD_DEG)`` (15-80 degrees), towards ``dip_direction`` with
+    probability ``SYNTHETIC_FRACTION`` (else antithetic). Throws follow a power law
+    (cumulative number N(> t) ~ t^-c, c = ``population_throw_exponent``; the largest at most
+    ``MAX_THROW_RATIO`` times the smallest), scaled so that the heaves (throw / tan dip) add up
+    to ``|base_stretch| * width``. Each dies out (taper 1: zero at its tips) over a half-length
+    from its throw and a ratio of largest displacement to length drawn log-uniform in
+    ``DL_RATIO`` (displacement grows about linearly with length: Clark & Cox 1996), kept within
+    ``HALF_LENGTH_RANGE`` of the height, so small faults are short and large ones cross the
+    section. Ages are in a random order.
+    """
+    e = float(params["base_stretch"])
+    if e == 0.0:
+        return []
+    W, H = cfg.model.width_m, cfg.model.height_m
+    rng = rng_at(cfg, run, SEED_POPULATION)
+    n = int(params["population_faults"])
+    dips = np.clip(rng.normal(float(params["dip_deg"]), POPULATION_DIP_SD_DEG, n), 15.0, 80.0)
+    main = 1 if str(params["dip_direction"]) == "right" else -1
+    dirs = np.where(rng.random(n) < SYNTHETIC_FRACTION, main, -main)
+    x_mid = rng.uniform(0.0, W, n)
+    c = float(params["population_throw_exponent"])
+    size = np.minimum((1.0 - rng.random(n)) ** (-1.0 / c), MAX_THROW_RATIO)
+    cot = 1.0 / np.tan(np.radians(dips))
+    throws = size * abs(e) * W / float(np.sum(size * cot))
+    centres = rng.uniform(0.2, 0.8, n) * H
+    ratio = np.exp(rng.uniform(np.log(DL_RATIO[0]), np.log(DL_RATIO[1]), n))
+    halves = np.clip(0.5 * throws / ratio, HALF_LENGTH_RANGE[0] * H, HALF_LENGTH_RANGE[1] * H)
+    order = rng.permutation(n)
+    kind = "normal" if e > 0 else "reverse"
+    return [KinematicFault(x_m=float(x_mid[i] + dirs[i] * 0.5 * H * cot[i]),
+                           dip_deg=float(dips[i]), throw_m=float(throws[i]),
+                           direction=int(dirs[i]), kind=kind, radius_m=None,
+                           centre_m=float(centres[i]), half_length_m=float(halves[i]), taper=1.0)
+            for i in order]
+
+
+def kinematic_faults(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo,
+                     rng: np.random.Generator) -> list[KinematicFault]:
+    """Every fault of run ``run``, oldest first: the population (:func:`population`), then the
+    basement faults of ``info`` (their centres drawn from ``rng``, the run's SEED_DEM
+    stream, whatever the snapshot)."""
+    H = cfg.model.height_m
+    faults = info.system.faults
+    centres = rng.uniform(0.35, 0.65, len(faults)) * H
+    taper = float(params["throw_taper"])
+    basement = [KinematicFault(x_m=f.x_m, dip_deg=f.dip_deg, throw_m=f.throw_m,
+                               direction=1 if f.dip_direction == "right" else -1, kind=f.kind,
+                               radius_m=f.radius_m if f.kind == "listric" else None,
+                               centre_m=float(centres[k]), half_length_m=HALF_LENGTH_FRAC * H,
+                               taper=taper)
+                for k, f in enumerate(faults)]
+    return population(cfg, params, run) + basement
+
+
 def unfault(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo, fraction: float,
             x_m: np.ndarray, depth_m: np.ndarray,
             maps: dict[str, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -121,22 +221,19 @@ def unfault(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo, fra
     X, D = np.asarray(x_m, dtype=np.float64), np.asarray(depth_m, dtype=np.float64)
     half_m = 0.5 * max(float(cfg.labels.thickness_cells), 1.0) * grid.cell_m
     rng = rng_at(cfg, run, SEED_DEM)
-    faults = info.system.faults
-    centres = rng.uniform(0.35, 0.65, len(faults)) * H  # drawn whatever the fraction
+    faults = kinematic_faults(cfg, params, run, info, rng)
     fold_x = np.linspace(-W, 2 * W, 3 * grid.nx + 1)
     fold = fold_field(fold_x, W, float(params["fold_amplitude_m"]), str(params["fold_kind"]), rng)
     axis = np.linspace(-(ABOVE + 1.0) * H, (2.0 + BELOW) * H, 8 * grid.nz + 1)
-    taper = float(params["throw_taper"])
     # youngest fault first: map present cells back to where their rock was before it slipped
     for k in range(len(faults) - 1, -1, -1):
         f = faults[k]
-        s = 1 if f.dip_direction == "right" else -1
-        radius = f.radius_m if f.kind == "listric" else None
-        xf, dipf = fault_geometry(axis, f.x_m, f.dip_deg, H, s, radius)
+        s = f.direction
+        xf, dipf = fault_geometry(axis, f.x_m, f.dip_deg, H, s, f.radius_m)
         x_here = np.interp(D, axis, xf)
         dip_here = np.interp(D, axis, dipf)
-        u = (D - centres[k]) / (HALF_LENGTH_FRAC * H)
-        throw = fraction * f.throw_m * np.clip(1.0 - taper * u**2, 0.0, None)
+        u = (D - f.centre_m) / f.half_length_m
+        throw = fraction * f.throw_m * np.clip(1.0 - f.taper * u**2, 0.0, None)
         hanging = (X - x_here) * s > 0
         if maps is not None:
             _draw_fault(maps, k, f.kind, np.abs(X - x_here) * np.sin(np.radians(dip_here)),

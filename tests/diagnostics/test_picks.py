@@ -1,0 +1,75 @@
+"""The picked fault target against kinematic faults of known geometry, and its shape on DEM runs."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import demseis
+from demseis.diagnostics.picks import kinematic_agreement, shape_counts, true_trace
+from demseis.generator.config import load_config, parse_config
+from demseis.generator.engines import get_engine
+from demseis.generator.engines.kinematic import kinematic_faults
+from demseis.generator.layout import grid_of
+from demseis.generator.sampling import SEED_DEM, plan_run, rng_at
+from demseis.generator.survey import trace_spacing
+
+
+def _kinematic(domain: str, throw: tuple[float, float], taper: float) -> dict:
+    raw = load_config(preset="tiny").to_dict()
+    raw["sweep"].update(seed=3, n_runs=6, dip_deg={"dist": "uniform", "low": 35, "high": 80},
+                        throw_m={"dist": "uniform", "low": throw[0], "high": throw[1]},
+                        fault_kind={"dist": "choice", "values": ["normal", "reverse"]},
+                        fault_x_frac={"dist": "uniform", "low": 0.3, "high": 0.7},
+                        dip_direction={"dist": "choice", "values": ["right", "left"]},
+                        throw_taper=taper, snr_db="inf", freq_hz=30)
+    raw["model"].update(engine="kinematic", width_m=2000.0, height_m=800.0, n_snapshots=3)
+    raw["grid"]["cell_m"] = 5.0 if domain == "time" else 10.0
+    raw["output"] = {"domain": domain, "dt_s": 0.004, "trace_spacing_m": 25.0}
+    return raw
+
+
+def _pooled(rows, key, weight):
+    return sum(r[key] * r[weight] for r in rows) / sum(r[weight] for r in rows)
+
+
+@pytest.mark.parametrize("domain,throw,taper", [("time", (3.0, 30.0), 1.0),
+                                                ("time", (20.0, 200.0), 0.5),
+                                                ("depth", (5.0, 60.0), 1.0)])
+def test_picks_lie_on_the_true_trace_and_find_it_where_the_throw_shows(domain, throw, taper):
+    cfg = parse_config(_kinematic(domain, throw, taper))
+    rows = kinematic_agreement(cfg, list(range(6)))
+    assert sum(r["label_px"] for r in rows) > 200
+    assert _pooled(rows, "on_trace", "label_px") >= 0.95
+    assert _pooled(rows, "found", "visible_px") >= 0.95
+
+
+def test_the_check_fails_for_a_trace_three_traces_off():
+    cfg = parse_config(_kinematic("time", (20.0, 200.0), 0.5))
+    engine = get_engine("kinematic")
+    spec = plan_run(cfg, 0)
+    er = engine.simulate(cfg, spec)
+    fault = kinematic_faults(cfg, spec.params, 0, er.info, rng_at(cfg, 0, SEED_DEM))[0]
+    vp = np.full((grid_of(cfg).nz, 80), 2500.0)
+    here, _ = true_trace(cfg, fault, 1.0, vp)
+    off, _ = true_trace(cfg, dataclasses.replace(fault, x_m=fault.x_m + 3 * trace_spacing(cfg)),
+                        1.0, vp)
+    assert here.sum() > 50 and off.sum() > 50
+    rows_here = {(r, c) for r, c in zip(*np.nonzero(here))}
+    shifted = {(r, c - 3) for r, c in zip(*np.nonzero(off))}
+    assert len(rows_here & shifted) >= 0.9 * len(rows_here)     # the same line, 3 traces over
+    assert not (here & off).any()
+
+
+def test_picked_dem_labels_have_no_loops_or_rungs(tiny_store):
+    store = demseis.open(tiny_store)
+    seen = 0
+    for i in range(len(store.params["run_id"])):
+        s = store.sample(i)
+        counts = shape_counts(s["fault"], s["fault_id"])
+        seen += int(s["fault"].any())
+        assert counts["instance_loops"] == 0, i
+        assert counts["rung_fraction"] == 0.0, i
+    assert seen > 0
