@@ -60,3 +60,43 @@ def test_relabel_of_a_store_from_before_the_strata_rendering_keeps_its_seismic(t
     assert stored_config(old).output.rendering == "elements"
     assert load_config(preset="tiny").output.rendering == "strata"   # the new default
     _relabel_strain_band(src, tmp_path)
+
+
+def test_a_store_from_before_the_picks_keeps_its_traces_and_relabel_picks_them(tmp_path):
+    """A store whose config has no [labels] fault_style drew its faults as traces: rendering
+    it again keeps them; ``relabel`` with an empty [labels] table draws them as picks."""
+    import zarr
+
+    from demseis.generator.config import stored_config
+    from demseis.generator.rerender import rerender
+
+    cfg = tmp_path / "t.toml"
+    cfg.write_text('[labels]\nfault_style = "traces"\nthickness_cells = 3.0\n')
+    src = tmp_path / "t.zarr"
+    assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(src), "--workers", "0",
+                 "--quiet"]) == 0
+    root = zarr.open_group(str(src), mode="r+")
+    old = dict(root.attrs["config"])
+    old["labels"] = {k: v for k, v in old["labels"].items() if k != "fault_style"}
+    root.attrs["config"] = old                     # as a store of the previous version has it
+    assert stored_config(old).labels.fault_style == "traces"
+    again = tmp_path / "again.zarr"
+    rerender(src, again, freqs_hz=[30.0], snrs_db=[float("inf")], progress=False)
+    a, b = zarr.open(str(src), mode="r"), zarr.open(str(again), mode="r")
+    key = lambda g, i: (int(g["params/run_id"][i]), int(g["params/snapshot"][i]))  # noqa: E731
+    first = {}
+    for i in range(a["fault"].shape[0]):
+        first.setdefault(key(a, i), i)
+    for j in range(b["fault"].shape[0]):                          # still traces
+        np.testing.assert_array_equal(a["fault"][first[key(b, j)]], b["fault"][j])
+    empty = tmp_path / "empty.toml"
+    empty.write_text("[labels]\n")
+    dst = tmp_path / "p.zarr"
+    assert main(["relabel", str(src), "--labels", str(empty), "--out", str(dst),
+                 "--quiet"]) == 0
+    c = zarr.open(str(dst), mode="r")
+    np.testing.assert_array_equal(a["seismic"][:].view(np.uint32),
+                                  c["seismic"][:].view(np.uint32))
+    thick, thin = a["fault"][:], c["fault"][:]
+    assert thin.sum() > 0 and thin.sum() < 0.6 * thick.sum()        # 3-cell bands -> lines
+    assert c.attrs["config"]["labels"]["fault_style"] == "picks"
