@@ -13,6 +13,15 @@ synthetic section, its fault label, so that the measures are taken in intact roc
 
 ``intact`` masks (:func:`intact_mask`) keep the pixels at least ``margin`` traces from any
 fault label, as the field README asks for stores.
+
+``demseis realism`` (:func:`realism_report`) puts a store beside a field section and the
+field targets (:data:`FIELD_TARGETS`) with these and:
+
+- :func:`dominant_period` (centroid of the traces' mean amplitude spectrum) and
+  :func:`peak_period`; :func:`excess_kurtosis` of the amplitudes;
+- from the labels: :func:`local_dips` (apparent dip in pixel space, a local principal axis
+  along each instance), :func:`faults_per_100_traces`, :func:`label_fraction` and
+  :func:`throws_m` (``slip_m * sin(dip_deg)``).
 """
 
 from __future__ import annotations
@@ -649,16 +658,17 @@ def realism_report(store, field=None, *, max_samples: int = 256, seed: int = 0) 
     Distributions are ``{"median", "p10", "p90", "n", "hist": {"edges", "counts"}}``. A field
     section is measured over all its traces and windows (it has no labels).
     """
+    from demseis.api import Store
     from demseis.evaluation.segyfile import read_segy_section
 
     path = getattr(store, "path", store)
-    if not _is_store_dir(path):
-        raise InputError(f"{str(path)!r} is not a demseis store (no such directory)")
-    report: dict = {"store": store_measures(path, max_samples, seed), "field": None,
-                    "targets": FIELD_TARGETS, "notes": []}
-    if field is not None:
+    Store(path)  # a missing or foreign store fails here, in one line
+    field_part = None
+    if field is not None:  # read before the store's samples: a bad file fails at once
         sec = read_segy_section(field)
-        report["field"] = {"path": str(field), "shape": list(sec.shape), **section_measures(sec)}
+        field_part = {"path": str(field), "shape": list(sec.shape), **section_measures(sec)}
+    report: dict = {"store": store_measures(path, max_samples, seed), "field": field_part,
+                    "targets": FIELD_TARGETS, "notes": []}
     if report["store"]["domain"] != "time":
         report["notes"].append(
             f"the store is in depth ({report['store']['pixels']}): its period, zero crossings and "
@@ -667,10 +677,20 @@ def realism_report(store, field=None, *, max_samples: int = 256, seed: int = 0) 
     return report
 
 
-def _is_store_dir(path) -> bool:
-    from pathlib import Path
+def report_json(report: dict) -> str:
+    """The report as strict JSON (NaN and infinities as null)."""
+    import json
 
-    return Path(path).is_dir()
+    def clean(x):
+        if isinstance(x, dict):
+            return {k: clean(v) for k, v in x.items()}
+        if isinstance(x, (list, tuple)):
+            return [clean(v) for v in x]
+        if isinstance(x, float) and not np.isfinite(x):
+            return None
+        return x
+
+    return json.dumps(clean(report), indent=1, allow_nan=False) + "\n"
 
 
 def _fmt(value, key: str) -> str:
