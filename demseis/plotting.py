@@ -17,6 +17,8 @@ import numpy as np
 
 from demseis.datasets import open_store, read_particles, read_sample, shard_status
 from demseis.errors import ConfigError, InputError
+from demseis.evaluation.realism import report_rows
+from demseis.evaluation.segyfile import read_segy_section
 from demseis.generator.config import PRESETS, Config, load_config, stored_config
 from demseis.generator.engines import get_engine, require_particles
 from demseis.generator.layout import grid_of
@@ -324,9 +326,6 @@ def plot_realism(report: dict, out: str | Path, *, credit: str | None = None) ->
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # lazy: see the module docstring
-
-    from demseis.evaluation.realism import report_rows
-    from demseis.evaluation.segyfile import read_segy_section
 
     st, field, targets = report["store"], report.get("field"), report["targets"]
     fig, axes = plt.subplots(2, 4, figsize=(17, 8), layout="constrained")

@@ -26,9 +26,15 @@ field targets (:data:`FIELD_TARGETS`) with these and:
 
 from __future__ import annotations
 
-import numpy as np
+import json
 
+import numpy as np
+from scipy import ndimage
+
+from demseis.datasets import open_store, read_sample, store_layout
+from demseis.datasets.read import done_samples
 from demseis.errors import InputError
+from demseis.evaluation.segyfile import read_segy_section
 
 WINDOW = 32
 """Samples per correlation window (half-overlapping)."""
@@ -331,8 +337,6 @@ def fault_instances(fault: np.ndarray, fault_id: np.ndarray | None = None) -> np
     if fault_id is not None:
         fid = np.asarray(fault_id).astype(np.int64)
         return np.where(np.asarray(fault) > 0, fid, 0) if fault is not None else fid
-    from scipy import ndimage
-
     lab, _ = ndimage.label(np.asarray(fault) > 0, structure=np.ones((3, 3), int))
     return lab
 
@@ -353,8 +357,6 @@ def local_dips(instances: np.ndarray, radius_px: int = 8, max_ratio: float = 0.3
     -------
     (n,) float64: the dips of the pixels that have one, instance by instance.
     """
-    from scipy import ndimage
-
     lab = np.asarray(instances)
     r = int(radius_px)
     dy, dx = np.mgrid[-r:r + 1, -r:r + 1].astype(np.float64)
@@ -462,6 +464,11 @@ def _distribution(values: np.ndarray, bins: np.ndarray | int = 30) -> dict | Non
     v = v[np.isfinite(v)]
     if v.size == 0:
         return None
+    if not isinstance(bins, int):       # fixed bins: extend them, at their step, over every value
+        bins = np.asarray(bins, np.float64)
+        step = bins[1] - bins[0]
+        if v.max() > bins[-1]:
+            bins = np.append(bins, bins[-1] + step * np.arange(1, np.ceil((v.max() - bins[-1]) / step) + 1))
     counts, edges = np.histogram(v, bins=bins)
     p10, med, p90 = (float(x) for x in np.percentile(v, [10, 50, 90]))
     return {"median": med, "p10": p10, "p90": p90, "n": int(v.size),
@@ -495,6 +502,23 @@ def section_measures(section: np.ndarray) -> dict:
             "spectrum": _spectrum_json(freq, amp)}
 
 
+class _StoreView:
+    """What a report reads of a store: its layout, root attributes, done samples and noise."""
+
+    def __init__(self, path) -> None:
+        self.path = getattr(path, "path", path)     # a path or a demseis.Store
+        root = open_store(self.path, "r")           # a missing or foreign store: StoreError
+        self.layout = store_layout(root)
+        self.attrs = dict(root.attrs)
+        self.arrays = tuple(self.layout.arrays)
+        self.done = done_samples(root, self.layout.n_samples, self.path, require_any=False)
+        self.snr_db = (np.asarray(root["params"]["snr_db"][:], np.float64)
+                       if "snr_db" in self.layout.params else None)
+
+    def __len__(self) -> int:
+        return self.layout.n_samples
+
+
 def _draw(cands: np.ndarray, max_samples: int, seed: int) -> np.ndarray:
     if cands.size <= max_samples:
         return cands
@@ -502,7 +526,8 @@ def _draw(cands: np.ndarray, max_samples: int, seed: int) -> np.ndarray:
 
 
 def choose_samples(store, max_samples: int = 256, seed: int = 0) -> tuple[np.ndarray, np.ndarray, str]:
-    """The samples a report measures, and a sentence saying which.
+    """The samples a report measures of ``store`` (a path or a :class:`demseis.Store`), and a
+    sentence saying which.
 
     Returns ``(seismic, labels, text)``: for the measures of the seismic, the complete samples
     without noise (``snr_db`` = inf) if the store has any, else all complete ones; for the
@@ -512,11 +537,11 @@ def choose_samples(store, max_samples: int = 256, seed: int = 0) -> tuple[np.nda
     """
     if max_samples < 1:
         raise InputError(f"max_samples must be >= 1, got {max_samples}")
+    store = store if isinstance(store, _StoreView) else _StoreView(store)
     done = np.asarray(store.done, bool)
     if not done.any():
         raise InputError(f"store {str(store.path)!r} has no complete samples")
-    clean = done & np.isposinf(np.asarray(store.params["snr_db"], np.float64)) \
-        if "snr_db" in store.layout.params else np.zeros_like(done)
+    clean = done & np.isposinf(store.snr_db) if store.snr_db is not None else np.zeros_like(done)
     if clean.any():
         sei, what = np.flatnonzero(clean), "noise-free (snr_db = inf)"
     else:
@@ -546,10 +571,7 @@ def _column_velocity(layer: np.ndarray, depth_span_m: float, dt_s: float) -> np.
 def store_measures(path, max_samples: int = 256, seed: int = 0) -> dict:
     """The measures of a store's samples (:func:`choose_samples`), pooled as the docstring of
     :func:`realism_report` says."""
-    from demseis.api import Store
-    from demseis.datasets import read_sample
-
-    store = Store(path)
+    store = _StoreView(path)
     if "seismic" not in store.arrays:
         raise InputError(f"store {str(path)!r} has no 'seismic' array")
     sei_idx, lab_idx, selection = choose_samples(store, max_samples, seed)
@@ -658,11 +680,8 @@ def realism_report(store, field=None, *, max_samples: int = 256, seed: int = 0) 
     Distributions are ``{"median", "p10", "p90", "n", "hist": {"edges", "counts"}}``. A field
     section is measured over all its traces and windows (it has no labels).
     """
-    from demseis.api import Store
-    from demseis.evaluation.segyfile import read_segy_section
-
     path = getattr(store, "path", store)
-    Store(path)  # a missing or foreign store fails here, in one line
+    _StoreView(path)  # a missing or foreign store fails here, in one line
     field_part = None
     if field is not None:  # read before the store's samples: a bad file fails at once
         sec = read_segy_section(field)
@@ -679,8 +698,6 @@ def realism_report(store, field=None, *, max_samples: int = 256, seed: int = 0) 
 
 def report_json(report: dict) -> str:
     """The report as strict JSON (NaN and infinities as null)."""
-    import json
-
     def clean(x):
         if isinstance(x, dict):
             return {k: clean(v) for k, v in x.items()}

@@ -281,3 +281,11 @@ def test_report_of_the_tiny_store(tiny_store):
     text = format_report(r)
     assert all(label in text for _, label, _ in MEASURES) and "81-88, median 85" in text
     assert json.loads(report_json(r))["store"]["shape"] == r["store"]["shape"]
+
+
+def test_distribution_bins_cover_every_value():
+    from demseis.evaluation.realism import _distribution
+
+    d = _distribution(np.array([1.0, 2.0, 12.3, np.nan]), np.linspace(0.0, 10.0, 41))
+    assert sum(d["hist"]["counts"]) == 3 == d["n"] and d["hist"]["edges"][-1] >= 12.3
+    assert _distribution(np.array([np.nan])) is None
