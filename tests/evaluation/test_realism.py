@@ -289,3 +289,18 @@ def test_distribution_bins_cover_every_value():
     d = _distribution(np.array([1.0, 2.0, 12.3, np.nan]), np.linspace(0.0, 10.0, 41))
     assert sum(d["hist"]["counts"]) == 3 == d["n"] and d["hist"]["edges"][-1] >= 12.3
     assert _distribution(np.array([np.nan])) is None
+
+
+def test_throw_in_samples_of_a_time_store(tmp_path):
+    """In time, throw in samples is 2 throw / (v dt) with v the column's mean velocity: the
+    ratio to throw in metres implies a rock velocity between 1.5 and 6 km/s, and the report
+    says nothing about depth cells."""
+    from tests.generator._helpers import generate_tiny
+
+    store = generate_tiny(tmp_path, '[sweep]\nn_runs = 1\n[output]\ndomain = "time"\n'
+                          'dt_s = 0.004\n', "t")
+    r = realism_report(store)
+    m = r["store"]["measures"]
+    assert r["store"]["domain"] == "time" and not r["notes"]
+    v = 2 * m["throw_m"]["median"] / (m["throw_samples"]["median"] * 0.004)
+    assert 1500 < v < 6000, v
