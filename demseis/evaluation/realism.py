@@ -573,7 +573,7 @@ def store_measures(path, max_samples: int = 256, seed: int = 0) -> dict:
     :func:`realism_report` says."""
     store = _StoreView(path)
     if "seismic" not in store.arrays:
-        raise InputError(f"store {str(path)!r} has no 'seismic' array")
+        raise InputError(f"store {str(store.path)!r} has no 'seismic' array")
     sei_idx, lab_idx, selection = choose_samples(store, max_samples, seed)
     grid = store.attrs.get("grid", {})
     domain = grid.get("domain", "depth")
@@ -635,7 +635,7 @@ def store_measures(path, max_samples: int = 256, seed: int = 0) -> dict:
     }
     unit = (f"time samples of {dt_s * 1e3:g} ms" if domain == "time"
             else f"depth cells of {cell_m:g} m")
-    return {"path": str(path), "shape": [h, w], "domain": domain, "cell_m": cell_m,
+    return {"path": str(store.path), "shape": [h, w], "domain": domain, "cell_m": cell_m,
             "dt_s": dt_s, "pixels": unit, "selection": selection,
             "seismic_samples": [int(i) for i in sei_idx],
             "label_samples": sorted(int(i) for i in lab_set), "measures": measures,

@@ -304,3 +304,10 @@ def test_throw_in_samples_of_a_time_store(tmp_path):
     assert r["store"]["domain"] == "time" and not r["notes"]
     v = 2 * m["throw_m"]["median"] / (m["throw_samples"]["median"] * 0.004)
     assert 1500 < v < 6000, v
+
+
+def test_report_takes_an_open_store(tiny_store):
+    import demseis
+
+    r = realism_report(demseis.open(tiny_store), max_samples=2)
+    assert r["store"]["path"] == str(tiny_store)
