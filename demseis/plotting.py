@@ -17,6 +17,8 @@ import numpy as np
 
 from demseis.datasets import open_store, read_particles, read_sample, shard_status
 from demseis.errors import ConfigError, InputError
+from demseis.evaluation.realism import report_rows
+from demseis.evaluation.segyfile import read_segy_section
 from demseis.generator.config import PRESETS, Config, load_config, stored_config
 from demseis.generator.engines import get_engine, require_particles
 from demseis.generator.layout import grid_of
@@ -309,3 +311,103 @@ def plot_snapshots(snaps: Sequence[Snapshot], path: str | os.PathLike, *, n_grou
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
+
+
+def plot_realism(report: dict, out: str | Path, *, credit: str | None = None) -> Path:
+    """The figure of a realism report (:func:`demseis.evaluation.realism.realism_report`).
+
+    Top: a measured store sample with its fault label, the field section (when the report has
+    one), the mean amplitude spectra, and the table's scalar measures. Bottom: the store's
+    distributions of apparent dip (pixels), faults per 100 traces, label fraction and throw
+    (output samples), with the field targets as grey bands (10th-90th percentile or range)
+    and dashed lines (median). ``credit`` (a data licence line) is printed under the figure.
+    """
+    import matplotlib  # lazy: see the module docstring
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # lazy: see the module docstring
+
+    st, field, targets = report["store"], report.get("field"), report["targets"]
+    fig, axes = plt.subplots(2, 4, figsize=(17, 8), layout="constrained")
+    # a sample with faults, if one was measured
+    idx = st["seismic_samples"]
+    pick = idx[0]
+    for i in idx:
+        if np.any(read_sample(st["path"], i, ("fault",)).arrays["fault"] == 1):
+            pick = i
+            break
+    arrays = ("seismic", "fault") if "fault" in open_store(st["path"]) else ("seismic",)
+    a = read_sample(st["path"], pick, arrays).arrays
+    sec = a["seismic"]
+    clip = float(np.percentile(np.abs(sec), 99)) or 1.0
+    ax = axes[0, 0]
+    ax.imshow(sec, cmap="gray", vmin=-clip, vmax=clip, aspect="auto", interpolation="nearest")
+    if "fault" in a:
+        from matplotlib.colors import ListedColormap  # lazy: see the module docstring
+
+        ax.imshow(np.ma.masked_not_equal(a["fault"], 1), cmap=ListedColormap(["red"]),
+                  aspect="auto", interpolation="nearest", alpha=0.8)
+    ax.set_title(f"store sample {pick} (label red)")
+    ax.set_xlabel("trace (column)")
+    ax.set_ylabel(st["pixels"].split(" of ")[0].rstrip("s") + " (row)")
+    ax = axes[0, 1]
+    if field:
+        fsec = read_segy_section(field["path"])
+        clip = float(np.percentile(np.abs(fsec), 99)) or 1.0
+        ax.imshow(fsec, cmap="gray", vmin=-clip, vmax=clip, aspect="auto", interpolation="nearest")
+        ax.set_title(f"field section {Path(field['path']).name}")
+        ax.set_xlabel("trace")
+        ax.set_ylabel("time sample")
+    else:
+        ax.axis("off")
+        ax.text(0.5, 0.5, "no field section", ha="center", va="center", transform=ax.transAxes)
+    ax = axes[0, 2]
+    for part, name, color in ((st, "store", "C0"), (field, "field", "k")):
+        if part:
+            sp = part["spectrum"]
+            ax.plot(sp["freq_cycles_per_sample"], sp["amplitude"], color=color, label=name)
+    ax.set_xlim(0, 0.5)
+    ax.set_xlabel("frequency (cycles per sample; period = 1 / f)")
+    ax.set_ylabel("mean amplitude (peak = 1)")
+    ax.set_title("amplitude spectra of the traces")
+    ax.legend()
+    ax = axes[0, 3]
+    ax.axis("off")
+    rows = [r for r in report_rows(report)][:5]
+    text = "\n\n".join(f"{r[0]}\n  store {r[1]}   field {r[2]}   target {r[3]}" for r in rows)
+    ax.text(0, 1, text, va="top", ha="left", family="monospace", fontsize=8.5,
+            transform=ax.transAxes)
+    ax.set_title("seismic measures")
+    hists = (("apparent_dip_deg", "apparent dip in pixels (deg from horizontal)"),
+             ("faults_per_100_traces", "faults per 100 traces (per sample)"),
+             ("label_fraction_pct", "label fraction (% of pixels, per sample)"),
+             ("throw_samples", f"throw ({st['pixels'].split(' of ')[0]}, per label pixel)"))
+    for ax, (key, label) in zip(axes[1], hists):
+        d = st["measures"].get(key)
+        if not d:
+            ax.text(0.5, 0.5, "no labels", ha="center", va="center", transform=ax.transAxes)
+            ax.set_title(label)
+            continue
+        edges = np.asarray(d["hist"]["edges"])
+        counts = np.asarray(d["hist"]["counts"], float)
+        ax.stairs(counts / max(counts.sum(), 1), edges, fill=True, alpha=0.6, color="C0",
+                  label="store")
+        t = targets.get(key)
+        if t:
+            if t.get("low") is not None:
+                ax.axvspan(t["low"], t["high"], color="0.5", alpha=0.25,
+                           label=f"field target {t['text']}")
+            if t.get("median") is not None:
+                ax.axvline(t["median"], color="k", ls="--", lw=1)
+        ax.axvline(d["median"], color="C0", lw=1.5)
+        ax.set_title(label)
+        ax.set_ylabel("share")
+        ax.legend(fontsize=8, loc="upper left")
+    fig.suptitle(f"{Path(st['path']).name}: {st['selection']}", fontsize=9)
+    if credit:
+        fig.text(0.5, -0.01, credit, ha="center", va="top", fontsize=9)
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=100, bbox_inches="tight")
+    plt.close(fig)
+    return out

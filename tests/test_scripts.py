@@ -57,3 +57,19 @@ def test_field_figures_render(tmp_path):
                          check=True, env=env, capture_output=True, text=True).stdout
     assert json.loads(out)["share_above_0.5"][str(tmp_path / "p.npy")] == 0.0023
     assert (tmp_path / "s.png").stat().st_size > 20_000 and (tmp_path / "p.png").stat().st_size > 20_000
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not FIELD.is_file(), reason="needs ../shared/field/f3_inline.sgy")
+def test_realism_figure_renders(tiny_store, tmp_path):
+    """scripts/realism_figure.py: the tiny store beside F3, with the licence line."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    env = {"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"}
+    out = subprocess.run([sys.executable, str(SCRIPTS / "realism_figure.py"), str(tiny_store),
+                          "--max-samples", "4", "--out", str(tmp_path / "r.png")],
+                         check=True, env=env, capture_output=True, text=True).stdout
+    assert "| adjacent-trace correlation |" in out and "| 0.917 |" in out
+    assert (tmp_path / "r.png").stat().st_size > 20_000

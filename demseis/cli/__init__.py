@@ -3,7 +3,7 @@
 - :mod:`demseis.cli.generate`: ``generate``, ``render``
 - :mod:`demseis.cli.store`: ``info``, ``validate``, ``export-segy``
 - :mod:`demseis.cli.plots`: ``plot``, ``preview``
-- :mod:`demseis.cli.evaluate`: ``score``, ``baseline``
+- :mod:`demseis.cli.evaluate`: ``score``, ``baseline``, ``realism``
 - :mod:`demseis.cli.model`: ``train``, ``predict``
 - :mod:`demseis.cli.bench`: ``bench dem|seismic|labels|loader``
 

@@ -1,4 +1,5 @@
-"""``demseis score`` and ``demseis baseline``: benchmark predictions against a store."""
+"""``demseis score``, ``demseis baseline`` and ``demseis realism``: benchmark predictions
+against a store, and a store against a field section."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import os
 import sys
 from typing import TYPE_CHECKING
 
+from demseis.cli._args import nonneg_int, pos_int
 from demseis.errors import InputError
 
 if TYPE_CHECKING:
@@ -76,6 +78,28 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     b.add_argument("--overwrite", action="store_true", help="replace an existing output")
     b.set_defaults(func=_baseline_command)
 
+    r = sub.add_parser(
+        "realism",
+        help="measures of a store beside a field section and field targets",
+        description="Measure a store's samples as a field section is measured (dominant period, "
+        "zero crossings, adjacent-trace correlation away from faults, amplitude kurtosis; "
+        "noise-free samples where the store has some) and its fault labels (apparent dip in "
+        "pixels, faults per 100 traces, label fraction, throw), beside the same measures of "
+        "a SEG-Y field section (--field) and targets from hand-picked field sections. Prints "
+        "a table; with --out writes DIR/realism.json, DIR/realism.md and DIR/realism.png.",
+    )
+    r.add_argument("store", metavar="STORE", help="demseis Zarr store")
+    r.add_argument("--field", default=None, metavar="SECTION.sgy",
+                   help="a 2D SEG-Y field section to measure beside the store")
+    r.add_argument("--out", default=None, metavar="DIR",
+                   help="write realism.json, realism.md and realism.png here")
+    r.add_argument("--max-samples", type=pos_int, default=256, metavar="N",
+                   help="measure at most N samples, drawn with --seed (default 256)")
+    r.add_argument("--seed", type=nonneg_int, default=0, help="seed of that draw (default 0)")
+    r.add_argument("--credit", default=None, metavar="TEXT",
+                   help="a line printed under the figure, e.g. the field data's licence")
+    r.set_defaults(func=_realism_command)
+
 
 def _default_prefix(pred_path: str) -> str:
     base = pred_path.rstrip("/\\")
@@ -131,4 +155,26 @@ def _baseline_command(args: argparse.Namespace) -> int:
         overwrite=args.overwrite, progress=sys.stderr.isatty())
     print(f"wrote {args.out}: {done} of {n} samples (others are incomplete shards); "
           "call a fault at probability >= 0.5")
+    return 0
+
+
+def _realism_command(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from demseis.evaluation.realism import (format_report, realism_report, report_json,
+                                            report_markdown)
+
+    if args.field is not None and not Path(args.field).is_file():
+        raise InputError(f"--field {args.field!r} does not exist")
+    report = realism_report(args.store, args.field, max_samples=args.max_samples, seed=args.seed)
+    print(format_report(report))
+    if args.out:
+        from demseis.plotting import plot_realism
+
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "realism.json").write_text(report_json(report))
+        (out / "realism.md").write_text(report_markdown(report))
+        plot_realism(report, out / "realism.png", credit=args.credit)
+        print(f"wrote {out / 'realism.json'}, {out / 'realism.md'}, {out / 'realism.png'}")
     return 0
