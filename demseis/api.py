@@ -93,7 +93,9 @@ class Store:
         return self._params
 
     def sample(self, index: int) -> dict[str, Any]:
-        """Sample ``index``: every array as (H, W) NumPy and every parameter as a scalar.
+        """Sample ``index``: every array as (H, W) NumPy and every parameter as a scalar;
+        ``"params"`` holds all parameters, including those named like an array (``dip_deg`` is
+        the label array at the top level, the run's basement dip in ``params``).
 
         Raises
         ------
@@ -113,8 +115,12 @@ class Store:
         # checksums checked: a damaged sample is a StoreError naming the sample and the array
         sample = read_sample(self.path, i, self.arrays)
         out: dict[str, Any] = dict(sample.arrays)
-        for k, v in sample.params.items():  # categorical ones as their names
-            out[k] = v.item() if hasattr(v, "item") else v
+        params = {k: v.item() if hasattr(v, "item") else v  # categorical ones as their names
+                  for k, v in sample.params.items()}
+        # a parameter named like an array (dip_deg: the run's basement dip, and the label of
+        # each fault pixel's dip) leaves the array in place; every parameter is in "params"
+        out.update({k: v for k, v in params.items() if k not in out})
+        out["params"] = params
         return out
 
     def summary(self) -> str:

@@ -95,3 +95,10 @@ def test_front_door_is_lazy():
             "print(sorted(m for m in ('torch', 'dask', 'matplotlib', 'xarray') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_a_sample_keeps_its_label_arrays_and_every_parameter(tiny):
+    s = tiny.sample(4)
+    assert s["dip_deg"].shape == s["fault"].shape                # the label, not the parameter
+    assert s["params"]["dip_deg"] == float(tiny.params["dip_deg"][4])
+    assert s["snr_db"] == s["params"]["snr_db"]
