@@ -350,6 +350,10 @@ _DECLARED: tuple[Param, ...] = (
        doc="sections and labels in depth cells, or on a two-way-time axis"),
     _p("dt_s", float, "sweep", 0.002, 1.0e-4, 0.02, unit="s", section="output",
        doc="time-domain sample interval"),
+    _p("time_window", str, "sweep", "model", choices=("model", "rock"), section="output",
+       doc="time-domain record length: model (the whole model fits at the slowest Vp the "
+           "sweep allows, deep samples past a fast column's rock are empty) or rock (what every "
+           "column fills at the fastest Vp, as a survey's fixed record: rock below it is cut)"),
     _p("trace_spacing_m", float, "sweep", 0.0, 0.0, 1000.0, unit="m", section="output",
        doc="distance between the output traces (columns), independent of the model and its "
            "elements, as a survey's trace spacing (12.5-25 m); 0 = the grid cell (grid.cell_m)"),

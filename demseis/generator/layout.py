@@ -41,14 +41,24 @@ def grid_of(cfg: Config) -> Grid:
 def time_axis_of(cfg: Config) -> np.ndarray | None:
     """The two-way-time axis (s) of a time-domain sweep, None in the depth domain.
 
-    Its length must be the same for every run, so it is built for the slowest Vp any run can
-    produce: the smallest lithology Vp, lowered by the largest ``vp_scatter`` the sweep allows.
+    Its length must be the same for every run. ``[output] time_window = "model"``: built for
+    the slowest Vp any run can produce (the smallest lithology Vp, lowered by the largest
+    ``vp_scatter`` the sweep allows), so the whole model fits. ``"rock"``: the two-way time of
+    the model's height at the fastest Vp (the largest lithology Vp, raised by three times the
+    largest ``vp_scatter`` and by the largest burial gradient over the height), so every
+    column holds rock to the last sample.
     """
     if cfg.output.domain != "time":
         return None
-    scatter_hi = spec_values_hint(cfg.sweep.params["vp_scatter"])[1]
-    vp_min = float(min(cfg.properties["vp_min_m_s"])) * (1.0 - 3.0 * float(scatter_hi))
+    scatter_hi = float(spec_values_hint(cfg.sweep.params["vp_scatter"])[1])
     grid = grid_of(cfg)
+    if cfg.output.time_window == "rock":
+        grad_hi = float(spec_values_hint(cfg.sweep.params["vp_gradient_per_km"])[1])
+        vp_fast = (float(max(cfg.properties["vp_max_m_s"])) * (1.0 + 3.0 * scatter_hi)
+                   * (1.0 + grad_hi * grid.nz * grid.cell_m / 1000.0))
+        n = max(int(np.floor(2.0 * grid.nz * grid.cell_m / (vp_fast * cfg.output.dt_s))), 1)
+        return np.arange(n) * float(cfg.output.dt_s)
+    vp_min = float(min(cfg.properties["vp_min_m_s"])) * (1.0 - 3.0 * scatter_hi)
     return time_axis(grid.nz, grid.cell_m, vp_min, cfg.output.dt_s)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from demseis.generator.config import parse_config
 from demseis.generator.layout import sample_shape
 from demseis.generator.survey import (damage_factor, fill_gaps, fine_depths, hold_small_steps,
@@ -128,3 +129,28 @@ def test_hold_small_steps_drops_drifts_below_the_tolerance_only():
     assert np.count_nonzero(np.diff(vp[:, 0])) == 199
     assert np.count_nonzero(np.diff(held_vp[:, 0])) <= 40
     np.testing.assert_array_equal(held_vp[:, 1], vp[:, 1])          # no drift: unchanged
+
+
+def test_rock_time_window_is_the_height_at_the_fastest_vp_and_every_column_fills_it(tmp_path):
+    import demseis
+    from demseis.errors import ConfigError
+    from demseis.generator.layout import time_axis_of
+
+    whole = _cfg(domain="time", dt_s=0.004)
+    rock = _cfg(domain="time", dt_s=0.004, time_window="rock")
+    t_whole, t_rock = time_axis_of(whole), time_axis_of(rock)
+    # 400 m at the fastest Vp: 5500 m/s * (1 + 3 * 0.03) * (1 + 0.05 * 0.4) = 6115 m/s
+    assert t_rock.size == int(np.floor(2 * 400.0 / (5500 * 1.09 * 1.02) / 0.004))
+    assert t_rock.size < t_whole.size
+    np.testing.assert_allclose(t_rock, t_whole[: t_rock.size])
+    raw = {"model": {"width_m": 1000.0, "height_m": 400.0, "engine": "kinematic",
+                     "n_snapshots": 2},
+           "sweep": {"throw_m": 100.0, "n_layers": 8, "n_runs": 2, "snr_db": "inf"},
+           "output": {"domain": "time", "dt_s": 0.004, "time_window": "rock"}}
+    store = demseis.generate(raw, out=tmp_path / "r.zarr", workers=0, progress=False)
+    for i in range(len(store.params["run_id"])):
+        s = store.sample(i)
+        assert s["seismic"].shape[0] == t_rock.size
+        assert (s["layer"] >= 0).all()                 # rock down to the last sample
+    with pytest.raises(ConfigError, match="time_window"):
+        _cfg(domain="time", time_window="survey")
