@@ -1,0 +1,77 @@
+"""The picked fault target against kinematic faults of known geometry, and its shape on DEM stores.
+
+For each sampling (4 ms time with small throws tapering to zero, 4 ms with large throws, 10 m
+depth cells), renders kinematic runs with one planar fault (dips 35-80 deg, normal and
+reverse, 25 m traces) and prints one JSON line with the pooled share of label pixels within
+one pixel of the true trace and of the true trace (throw >= min_throw_samples) within one
+pixel of a label (demseis.diagnostics.picks.kinematic_agreement). With --store, one more line
+with the loops and rungs of every sample's labels there (shape_counts).
+
+    PYTHONPATH=$PWD python benchmarks/labels_picks.py [--runs 8] [--store quick.zarr]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+
+CASES = {"time_small_throws": ("time", (3.0, 30.0), 1.0),
+         "time_large_throws": ("time", (20.0, 200.0), 0.5),
+         "depth": ("depth", (5.0, 60.0), 1.0)}
+
+
+def config(domain: str, throw: tuple[float, float], taper: float, n_runs: int):
+    from demseis.generator.config import load_config, parse_config
+
+    raw = load_config(preset="tiny").to_dict()
+    raw["sweep"].update(seed=3, n_runs=n_runs, dip_deg={"dist": "uniform", "low": 35, "high": 80},
+                        throw_m={"dist": "uniform", "low": throw[0], "high": throw[1]},
+                        fault_kind={"dist": "choice", "values": ["normal", "reverse"]},
+                        fault_x_frac={"dist": "uniform", "low": 0.3, "high": 0.7},
+                        dip_direction={"dist": "choice", "values": ["right", "left"]},
+                        throw_taper=taper, snr_db="inf", freq_hz=30)
+    raw["model"].update(engine="kinematic", width_m=2000.0, height_m=800.0, n_snapshots=3)
+    raw["grid"]["cell_m"] = 5.0 if domain == "time" else 10.0
+    raw["output"] = {"domain": domain, "dt_s": 0.004, "trace_spacing_m": 25.0}
+    return parse_config(raw)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--runs", type=int, default=8)
+    ap.add_argument("--store", help="a store whose labels' loops and rungs are counted")
+    args = ap.parse_args(argv)
+    from demseis.diagnostics.picks import kinematic_agreement, shape_counts
+
+    for name, (domain, throw, taper) in CASES.items():
+        t0 = time.perf_counter()
+        rows = kinematic_agreement(config(domain, throw, taper, args.runs), list(range(args.runs)))
+        lab = sum(r["label_px"] for r in rows)
+        vis = sum(r["visible_px"] for r in rows)
+        print(json.dumps({
+            "benchmark": "labels_picks", "case": name, "runs": args.runs, "samples": len(rows),
+            "label_px": lab, "visible_px": vis,
+            "on_trace": round(sum(r["on_trace"] * r["label_px"] for r in rows) / max(lab, 1), 4),
+            "found": round(sum(r["found"] * r["visible_px"] for r in rows) / max(vis, 1), 4),
+            "worst_found": round(min(r["found"] for r in rows if r["visible_px"]), 4),
+            "seconds": round(time.perf_counter() - t0, 2)}))
+    if args.store:
+        import demseis
+
+        store = demseis.open(args.store)
+        counts = [shape_counts(s["fault"], s["fault_id"])
+                  for s in (store.sample(i) for i in range(len(store.params["run_id"])))]
+        print(json.dumps({
+            "benchmark": "labels_picks", "case": "store_shape", "store": args.store,
+            "samples": len(counts),
+            "instance_loops": int(sum(c["instance_loops"] for c in counts)),
+            "loops_of_the_union": int(sum(c["loops"] for c in counts)),
+            "max_rung_fraction": float(np.max([c["rung_fraction"] for c in counts]))}))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
