@@ -16,6 +16,15 @@ and fault face; the hanging-wall base and right wall moving down-dip at
 ``speed * (cos d, -sin d)``. A system whose faults all dip left is run mirrored and mirrored
 back (so a left-dipping fault gives exactly the mirror of a right-dipping one).
 
+A stretching base (``base_stretch`` e, a fraction of the width W): every block's top is cut
+into pieces of at most ``4 r_max`` whose ends move horizontally by ``e x0 f`` (x0 the base point
+each end started on, f the fraction of the run done): a rubber sheet fixed at x = 0 whose right
+end, and the right wall, move by ``e W``. Side walls and fault faces translate with the base
+point they stand on, on top of their block's motion. The pieces are re-placed on the exact
+stretch every 50 steps and translate with their mean velocity in between; friction on them
+drags the cover, which breaks into a fault population (``structure="none"``: no basement
+fault at all). The run lasts the longer of the master slip and ``|e| W`` at ``speed_m_s``.
+
 Sedimentation: at 1/4 and 1/2 of each interval between snapshots, wherever the top surface
 lies below the initial surface (``height_m``), new elements of that interval's growth layer fill
 the accommodation. They are cut from the run's own dense settled packing (so a growth layer is
