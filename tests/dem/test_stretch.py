@@ -189,6 +189,35 @@ def test_stretch_combines_with_a_basement_fault(monkeypatch):
     assert right[-1] - right[0] > 0.95 * (heave + 100.0)     # the cover follows
 
 
+@pytest.mark.parametrize("stretch", [0.2, -0.2])
+def test_no_gap_opens_in_a_run(monkeypatch, stretch):
+    """After a whole run with a rotating (listric) hanging wall and a stretching base, the
+    block-top pieces the engine holds still meet end to end (within 1% of r_min)."""
+    import demseis.dem.fault as fault_module
+    from demseis.dem.basement import half_graben
+
+    engines = []
+
+    class Recording(fault_module.Engine):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            engines.append(self)
+
+    monkeypatch.setattr(fault_module, "Engine", Recording)
+    asm = build_assembly(1000.0, 400.0, radius_min_m=12.5, radius_max_m=25.0, n_layers=4, rng=1)
+    system = half_graben(600.0, 55.0, 60.0, "right", 3000.0)
+    simulate(asm, system, Material(), n_snapshots=2, rng=2, base_stretch=stretch)
+    motions = block_kinematics(system, 1000.0)
+    walls0, owner, anchor = basement_walls(system, motions, 1000.0, 400.0, 25.0, 100.0)
+    for b in range(len(motions)):
+        mine = np.flatnonzero(np.isnan(anchor) & (owner == b))
+        mine = mine[np.argsort(walls0[mine, 0])]
+        now = engines[-1].walls[mine]
+        gaps = np.hypot(now[1:, 0] - now[:-1, 2], now[1:, 1] - now[:-1, 3])
+        assert gaps.max() < 0.01 * 12.5, (b, gaps.max())
+    assert engines[-1].walls.shape == walls0.shape
+
+
 def test_same_seed_same_bytes():
     def digest():
         asm = build_assembly(600.0, 300.0, radius_min_m=10.0, radius_max_m=20.0, n_layers=4,
