@@ -90,8 +90,13 @@ def check_physics(cfg: Any) -> None:
     tau = m_max_hi / (dt_hi * d_lo)
     # a run lasts the longer of its slip and its base stretch (|base_stretch| * width) at v;
     # a run without basement fault (structure "none") only the stretch
-    s_lo, s_hi = rng_of("base_stretch")
-    stretch_lo = 0.0 if s_lo <= 0.0 <= s_hi else min(abs(s_lo), abs(s_hi))
+    stretch = cfg.sweep.params["base_stretch"]
+    if isinstance(stretch, (Fixed, GridSpec)) or stretch.dist == "choice":
+        listed = (stretch.value,) if isinstance(stretch, Fixed) else stretch.values
+        stretch_lo = min(abs(float(x)) for x in listed)
+    else:                                  # a distribution: as close to 0 as its range allows
+        s_lo, s_hi = rng_of("base_stretch")
+        stretch_lo = 0.0 if s_lo <= 0.0 <= s_hi else min(abs(s_lo), abs(s_hi))
     t_stretch = stretch_lo * m.width_m / v
     spec = cfg.sweep.params["structure"]
     structures = ((spec.value,) if isinstance(spec, Fixed) else

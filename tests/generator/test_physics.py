@@ -92,3 +92,7 @@ def test_a_long_stretch_makes_a_short_throw_quasi_static():
     0.1 stretch, and so does a run without basement fault whose stretch lasts long enough."""
     parse_config({"sweep": {"throw_m": 1.0, "dip_deg": 45.0, "base_stretch": 0.1}})
     parse_config({"sweep": {"structure": "none", "base_stretch": -0.05}})
+    parse_config({"sweep": {"structure": "none", "base_stretch": [0.1, -0.1]}})
+    with pytest.raises(ConfigError, match="dynamic"):   # a range through 0 draws near-0 runs
+        parse_config({"sweep": {"structure": "none",
+                                "base_stretch": {"dist": "uniform", "low": -0.1, "high": 0.1}}})
