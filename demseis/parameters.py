@@ -191,9 +191,10 @@ _DECLARED: tuple[Param, ...] = (
        doc="side of the hanging wall"),
     # ---- per run: fault systems (demseis.dem.basement; "single" + "normal" is the fault above)
     _p("structure", str, "run", "single",
-       choices=("single", "domino", "graben", "horst", "half_graben"),
-       doc="basement structure: one fault, a domino (synthetic) set, graben, horst, or "
-           "half-graben (one listric fault); dip_deg and throw_m apply to every fault"),
+       choices=("single", "domino", "graben", "horst", "half_graben", "none"),
+       doc="basement structure: one fault, a domino (synthetic) set, graben, horst, "
+           "half-graben (one listric fault), or none (no basement fault: only the stretching "
+           "base, needs base_stretch != 0); dip_deg and throw_m apply to every fault"),
     _p("n_faults", int, "run", 1, 1, MAX_BASEMENT_FAULTS,
        doc="faults of a domino set (graben and horst have 2, the others 1)"),
     _p("fault_kind", str, "run", "normal", choices=("normal", "reverse", "listric"),
@@ -411,11 +412,13 @@ STORED: tuple[Stored, ...] = (
     Stored("snapshot", "int16", "snapshot", "", "snapshot index (0 = undeformed reference)"),
     Stored("step", "int64", "snapshot", "", "integrator step at which the snapshot was taken"),
     Stored("throw_m", "float32", "snapshot", "m", "basement throw reached at the snapshot"),
-    Stored("throw_target_m", "float32", "run", "m", "final basement throw of the run"),
-    Stored("fault_x_m", "float32", "run", "m", "x where the basement fault meets the base"),
+    Stored("throw_target_m", "float32", "run", "m", "final basement throw of the run (0 without "
+           "a basement fault)"),
+    Stored("fault_x_m", "float32", "run", "m", "x where the basement fault meets the base; "
+           "-1 if the run has none"),
     Stored("n_elements", "int32", "snapshot", "", "elements in the snapshot (deposits included)"),
     Stored("noise_seed", "uint64", "sample", "", "seed of the sample's noise Generator"),
-    Stored("n_basement_faults", "int8", "run", "", "basement faults of the run (1-5)"),
+    Stored("n_basement_faults", "int8", "run", "", "basement faults of the run (0-5; 0 for structure none)"),
     Stored("has_fault", "uint8", "snapshot", "", "1 if the fault label has any fault cell"),
     Stored("n_faults", "int16", "snapshot", "", "fault instances in the label"),
     Stored("max_slip_m", "float32", "snapshot", "m", "largest slip on the labelled traces"),

@@ -34,6 +34,12 @@ def _dem_fault(field):
     return check
 
 
+def _dem_stretch(name, value):
+    from demseis.dem.fault import validate_stretch
+
+    validate_stretch(value)
+
+
 def _property_model(name, value):
     from demseis.seismic import PropertyModel
 
@@ -86,6 +92,7 @@ STAGE = {
     "dip_deg": _dem_fault("dip_deg"),
     "throw_m": _dem_fault("throw_m"),
     "wall_speed_m_s": _dem_fault("speed_m_s"),
+    "base_stretch": _dem_stretch,
     **{name: _property_model for name in PROPERTY_FIELDS},
     **{name: _bed_model for name in BED_FIELDS},
     "freq_hz": _wavelet,

@@ -73,3 +73,18 @@ def test_realism_figure_renders(tiny_store, tmp_path):
                          check=True, env=env, capture_output=True, text=True).stdout
     assert "| adjacent-trace correlation |" in out and "| 0.917 |" in out
     assert (tmp_path / "r.png").stat().st_size > 20_000
+
+
+@pytest.mark.slow
+def test_stretch_figure_renders(tmp_path):
+    """scripts/stretch_figure.py draws a stretched section with its labelled faults (~10 s)."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, str(SCRIPTS / "stretch_figure.py"), "--stretch", "0.1",
+                          "--out", str(tmp_path / "s.png")], check=True, capture_output=True,
+                         text=True, env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"},
+                         cwd=root).stdout
+    assert int(out.split(": ")[1].split()[0]) >= 3
+    assert (tmp_path / "s.png").stat().st_size > 20_000

@@ -1,7 +1,7 @@
 """Basement boundary conditions as plain data: faults, the blocks between them, their motion.
 
-A :class:`FaultSystem` is 1-5 :class:`BasementFault` s ordered by their position ``x_m`` at the
-base of the model (y = 0). The faults cut the basement into ``n_faults + 1`` rigid blocks
+A :class:`FaultSystem` is 1-5 :class:`BasementFault` s (none for ``structure="none"``) ordered
+by their position ``x_m`` at the base of the model (y = 0). The faults cut the basement into ``n_faults + 1`` rigid blocks
 (block 0 is left of the first fault). :func:`block_kinematics` turns the description into the
 motion of every block; :func:`demseis.dem.simulate` turns that motion into moving walls.
 
@@ -105,7 +105,8 @@ class FaultSystem:
 
     Attributes
     ----------
-    faults : the faults, strictly increasing ``x_m``.
+    faults : the faults, strictly increasing ``x_m``; empty for ``structure="none"`` (a
+        basement without faults: one block, at rest unless the base stretches).
     speed_m_s : slip rate of the fault with the largest total slip (the master); the others
         slip in proportion so that every fault reaches its throw at the end.
     structure : name of the structure that generated the list (a label, not used by the DEM).
@@ -117,9 +118,16 @@ class FaultSystem:
 
     @property
     def master(self) -> int:
-        """Index of the fault with the largest total slip (first of ties)."""
+        """Index of the fault with the largest total slip (first of ties); -1 without faults."""
+        if not self.faults:
+            return -1
         slips = [f.slip_m() for f in self.faults]
         return int(np.argmax(slips))
+
+    @property
+    def master_slip_m(self) -> float:
+        """Total slip of the master fault (m); 0 without faults."""
+        return self.faults[self.master].slip_m() if self.faults else 0.0
 
     def mirrored(self, width_m: float) -> "FaultSystem":
         """The same system seen from behind (x -> width - x, directions swapped)."""
@@ -147,7 +155,10 @@ def check_fault_fields(where: str, f, width_m: float) -> None:
 def validate_system(system: FaultSystem, width_m: float, min_spacing_m: float = 0.0) -> None:
     """Raise :class:`InputError` naming the first bad field of ``system``."""
     faults = system.faults
-    if not isinstance(faults, tuple) or not (1 <= len(faults) <= MAX_FAULTS):
+    if system.structure == "none":
+        if faults != ():
+            raise InputError(f"FaultSystem.structure='none' has no faults, got {faults!r}")
+    elif not isinstance(faults, tuple) or not (1 <= len(faults) <= MAX_FAULTS):
         raise InputError(f"FaultSystem.faults must be a tuple of 1-{MAX_FAULTS} BasementFault, "
                          f"got {faults!r}")
     if not (math.isfinite(system.speed_m_s) and 0 < system.speed_m_s <= 100):
@@ -212,7 +223,7 @@ class BlockMotion:
 def block_kinematics(system: FaultSystem, width_m: float) -> list[BlockMotion]:
     """Motion of every block of ``system`` (see the module docstring), block 0 first."""
     faults = system.faults
-    master_slip = faults[system.master].slip_m()
+    master_slip = system.master_slip_m
     scale = [f.slip_m() / master_slip if master_slip > 0 else 0.0 for f in faults]
     n = len(faults)
     vel = [(0.0, 0.0)]
@@ -319,6 +330,8 @@ def draw_fault_system(rng: np.random.Generator, width_m: float, *, structure: st
     """
     if structure not in STRUCTURES:
         raise InputError(f"structure={structure!r}; allowed {', '.join(STRUCTURES)}")
+    if structure == "none":
+        return FaultSystem((), structure="none")
     direction = dip_direction or ("right" if rng.random() < 0.5 else "left")
     spacing = spacing_frac * width_m
     if structure == "domino":

@@ -16,6 +16,15 @@ and fault face; the hanging-wall base and right wall moving down-dip at
 ``speed * (cos d, -sin d)``. A system whose faults all dip left is run mirrored and mirrored
 back (so a left-dipping fault gives exactly the mirror of a right-dipping one).
 
+A stretching base (``base_stretch`` e, a fraction of the width W): every block's top is cut
+into pieces of at most ``4 r_max`` whose ends move horizontally by ``e x0 f`` (x0 the base point
+each end started on, f the fraction of the run done): a rubber sheet fixed at x = 0 whose right
+end, and the right wall, move by ``e W``. Side walls and fault faces translate with the base
+point they stand on, on top of their block's motion. The pieces are re-placed on the exact
+stretch every 50 steps and translate with their mean velocity in between; friction on them
+drags the cover, which breaks into a fault population (``structure="none"``: no basement
+fault at all). The run lasts the longer of the master slip and ``|e| W`` at ``speed_m_s``.
+
 Sedimentation: at 1/4 and 1/2 of each interval between snapshots, wherever the top surface
 lies below the initial surface (``height_m``), new elements of that interval's growth layer fill
 the accommodation. They are cut from the run's own dense settled packing (so a growth layer is
@@ -166,42 +175,51 @@ def _split(p0: np.ndarray, p1: np.ndarray, max_len: float) -> list[np.ndarray]:
 
 
 def basement_walls(system: FaultSystem, motions: list[BlockMotion], width_m: float,
-                   height_m: float, rmax: float) -> tuple[np.ndarray, np.ndarray]:
-    """Walls of the basement blocks before faulting, and the block each belongs to.
+                   height_m: float, rmax: float,
+                   base_piece_m: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Walls of the basement blocks before faulting, the block each belongs to, and the x whose
+    base stretch each follows.
 
     Order: left wall, then per block its top and the face of the fault on its right, then the
     right wall. Walls of a rotating block are cut into pieces of at most
     ``max(4 r_max, min(width, height) / 8)`` (each piece translates between wall updates).
+    With ``base_piece_m`` (a stretching base) every block top is cut into pieces of at most
+    that length, whose ends follow the stretch of the base (:func:`stretch_shift`).
 
     Returns
     -------
-    walls : (nw, 4) float64 [x0, y0, x1, y1]; owner : (nw,) int64 block index.
+    walls : (nw, 4) float64 [x0, y0, x1, y1]; owner : (nw,) int64 block index;
+    anchor : (nw,) float64: a block top's pieces NaN (each end stretches with the base point
+    it starts on), every other wall the x of the base point it translates with (0 the left
+    wall, ``width_m`` the right one, ``x_m`` the face of a fault).
     """
     top = 3.0 * height_m + 10 * rmax
     piece = max(4 * rmax, min(width_m, height_m) / 8)
     walls: list[np.ndarray] = []
     owner: list[int] = []
+    anchor: list[float] = []
 
-    def add(b: int, seg: np.ndarray) -> None:
-        if motions[b].rotates:
-            for s in _split(seg[:2], seg[2:], piece):
-                walls.append(s)
-                owner.append(b)
-        else:
-            walls.append(seg)
+    def add(b: int, seg: np.ndarray, at: float) -> None:
+        cut = piece if motions[b].rotates else None
+        if math.isnan(at) and base_piece_m is not None:
+            cut = base_piece_m if cut is None else min(cut, base_piece_m)
+        for s in (_split(seg[:2], seg[2:], cut) if cut is not None else [seg]):
+            walls.append(s)
             owner.append(b)
+            anchor.append(at)
 
     last = len(motions) - 1
     if motions[0].rotates:  # split the lower side wall finely, the rest in one piece
-        add(0, np.array([0.0, 0.0, 0.0, 1.5 * height_m]))
+        add(0, np.array([0.0, 0.0, 0.0, 1.5 * height_m]), 0.0)
         walls.append(np.array([0.0, 1.5 * height_m, 0.0, top]))
         owner.append(0)
+        anchor.append(0.0)
     else:
-        add(0, np.array([0.0, 0.0, 0.0, top]))
+        add(0, np.array([0.0, 0.0, 0.0, top]), 0.0)
     for b, m in enumerate(motions):
         x0 = -rmax if b == 0 else m.x_left_m
         x1 = width_m + rmax if b == last else m.x_right_m
-        add(b, np.array([x0, 0.0, x1, 0.0]))
+        add(b, np.array([x0, 0.0, x1, 0.0]), math.nan)
         if b == last:
             break
         f = system.faults[b]
@@ -221,17 +239,52 @@ def basement_walls(system: FaultSystem, motions: list[BlockMotion], width_m: flo
             for j in range(k):
                 walls.append(np.array([px[j], py[j], px[j + 1], py[j + 1]]))
                 owner.append(fw)
+                anchor.append(xf)
             continue
         L = f.slip_m() + 4 * rmax
         hw, fw = (b + 1, b) if a > 0 else (b, b + 1)
-        add(fw if f.kind == "normal" else hw, np.array([xf, 0.0, xf + a * L * cd, -L * sd]))
+        add(fw if f.kind == "normal" else hw, np.array([xf, 0.0, xf + a * L * cd, -L * sd]), xf)
     if motions[last].rotates:
-        add(last, np.array([width_m, 0.0, width_m, 1.5 * height_m]))
+        add(last, np.array([width_m, 0.0, width_m, 1.5 * height_m]), width_m)
         walls.append(np.array([width_m, 1.5 * height_m, width_m, top]))
         owner.append(last)
+        anchor.append(width_m)
     else:
-        add(last, np.array([width_m, 0.0, width_m, top]))
-    return np.array(walls), np.array(owner, dtype=np.int64)
+        add(last, np.array([width_m, 0.0, width_m, top]), width_m)
+    return np.array(walls), np.array(owner, dtype=np.int64), np.array(anchor)
+
+
+def stretch_shift(x0_m: np.ndarray, width_m: float, end_shift_m: float) -> np.ndarray:
+    """Horizontal displacement of base points that started at ``x0_m`` when the base's right
+    end (``x = width_m``) has moved ``end_shift_m`` and its left end (``x = 0``) is fixed.
+
+    The base stretches uniformly (a rubber sheet): ``u(x0) = end_shift * x0 / width``, clipped
+    to [0, end_shift] outside the model (the basement reaches ``r_max`` past the side walls).
+    A point's velocity is therefore linear in its present x as well:
+    ``v(x) = v_end * x / (width + end_shift)``.
+    """
+    x = np.asarray(x0_m, dtype=np.float64)
+    return end_shift_m * np.clip(x / width_m, 0.0, 1.0)
+
+
+def wall_ends(wall0: np.ndarray, motion: BlockMotion, anchor_x: float, width_m: float,
+              slip_m: float, end_shift_m: float) -> np.ndarray:
+    """(2, 2) ends of a basement wall (``wall0`` [x0, y0, x1, y1] before faulting, its block's
+    ``motion``, its ``anchor_x`` from :func:`basement_walls`) after ``slip_m`` of master slip
+    and ``end_shift_m`` of base stretch: the block's displacement plus the stretch of the base
+    points the ends started on (a block top's piece) or of its anchor (any other wall)."""
+    ends = np.asarray(wall0, dtype=np.float64).reshape(2, 2)
+    p = motion.displace(ends, slip_m)
+    if end_shift_m != 0.0:
+        x0 = ends[:, 0] if math.isnan(anchor_x) else np.full(2, anchor_x)
+        p[:, 0] += stretch_shift(x0, width_m, end_shift_m)
+    return p
+
+
+def validate_stretch(base_stretch: float) -> None:
+    """Raise :class:`InputError` unless ``base_stretch`` is a finite fraction in the declared
+    range of ``base_stretch``."""
+    PARAMS["base_stretch"].check_value(base_stretch, "base_stretch", InputError)
 
 
 def _layer_cmat(asm: Assembly, layer_materials: Sequence[Material]) -> tuple[np.ndarray, float]:
@@ -254,7 +307,8 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
              progress: Callable[[float], None] | None = None,
              settle_steps: int | None = None,
              erosion_level_m: float | None = None,
-             layer_materials: Sequence[Material] | None = None) -> list[Snapshot]:
+             layer_materials: Sequence[Material] | None = None,
+             base_stretch: float = 0.0) -> list[Snapshot]:
     """Fault ``asm`` by moving its basement blocks (see the module docstring).
 
     Parameters
@@ -281,10 +335,20 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
         ``material`` keeps the model, ``ks_ratio``, density, damping, gravity, the walls and
         the growth layers. dt follows the largest Kn.
 
+    base_stretch : distributed extension (> 0) or shortening (< 0) of the base as a fraction of
+        the width (-0.3 to 0.3; 0 = off): the top of every basement block is cut into pieces
+        of at most ``4 r_max`` whose ends move horizontally with the base point they started on
+        (:func:`stretch_shift`: left end fixed, right end and right wall moving by
+        ``base_stretch * width``), on top of their block's motion; side walls and fault faces
+        translate with the base point they stand on. The frictional pieces drag the cover.
+        ``FaultSystem((), structure="none")`` is a basement without faults: only the stretch.
+
     Returns
     -------
     list of Snapshot, ``n_snapshots`` long. ``Snapshot.throw_m`` is the master fault's throw
-    (the fault with the largest slip); :meth:`FaultSystem.throws_at` gives every fault's.
+    (the fault with the largest slip; 0 without faults); :meth:`FaultSystem.throws_at` gives
+    every fault's. The run lasts the larger of the master slip and ``|base_stretch| * width``
+    at the wall speed; snapshot k holds k / (n_snapshots - 1) of both.
 
     Raises
     ------
@@ -296,6 +360,10 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
         validate_fault(fault, asm.width_m)
     system = as_system(fault)
     validate_system(system, asm.width_m)
+    validate_stretch(base_stretch)
+    if not system.faults and base_stretch == 0.0:
+        raise InputError("a FaultSystem without faults (structure 'none') needs base_stretch "
+                         "!= 0: nothing would move")
     if not isinstance(n_snapshots, (int, np.integer)) or n_snapshots < 2:
         raise InputError(f"n_snapshots={n_snapshots!r} must be an integer >= 2")
     if erosion_level_m is not None and not math.isfinite(erosion_level_m):
@@ -305,13 +373,13 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
     elif isinstance(rng, (int, np.integer)):
         rng = np.random.default_rng(int(rng))
     W, H = asm.width_m, asm.height_m
-    mirror = all(f.dip_direction == "left" for f in system.faults)
+    mirror = bool(system.faults) and all(f.dip_direction == "left" for f in system.faults)
     if mirror:
         system = system.mirrored(W)
     xy0 = asm.xy.copy()
     if mirror:
         xy0[:, 0] = W - xy0[:, 0]
-    master = system.faults[system.master]
+    master = system.faults[system.master] if system.faults else None
     rmin, rmax = asm.radius_min_m, asm.radius_max_m
     motions = block_kinematics(system, W)
     rotating = [b for b, m in enumerate(motions) if m.rotates]
@@ -328,11 +396,15 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
     if cmat is not None:
         eng.set_element_material(cmat)
 
-    dip_total = master.slip_m()
-    walls0, owner = basement_walls(system, motions, W, H, rmax)
+    dip_total = system.master_slip_m
+    stretch_total = float(base_stretch) * W   # displacement of the base's right end (m)
+    walls0, owner, anchor = basement_walls(system, motions, W, H, rmax,
+                                           4 * rmax if stretch_total != 0.0 else None)
     eng.set_walls(walls0)
     corners = np.concatenate([m.displace([[m.x_left_m, 0.0], [m.x_right_m, 0.0]], dip_total)
                               for m in motions])
+    corners[:, 0] += stretch_shift(np.concatenate([[m.x_left_m, m.x_right_m] for m in motions]),
+                                   W, stretch_total)
     top = 3.0 * H + 10 * rmax
     eng.box = np.array([min(0.0, corners[:, 0].min()) - 4 * rmax,
                         max(W, corners[:, 0].max()) + 4 * rmax,
@@ -355,10 +427,13 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
     if settle_steps is None:
         settle_steps = int(2.0 / eng.dt)
     n_interval = n_snapshots - 1
-    steps_per_interval = max(int(math.ceil(dip_total / n_interval / (system.speed_m_s * eng.dt))),
-                             1) if dip_total > 0 else 0
+    path = max(dip_total, abs(stretch_total))  # the longer of slip and stretch sets the pace
+    steps_per_interval = max(int(math.ceil(path / n_interval / (system.speed_m_s * eng.dt))),
+                             1) if path > 0 else 0
     total_steps = settle_steps + steps_per_interval * n_interval
     v_dip = dip_total / n_interval / (steps_per_interval * eng.dt) if steps_per_interval else 0.0
+    v_end = (stretch_total / n_interval / (steps_per_interval * eng.dt)
+             if steps_per_interval else 0.0)          # speed of the base's right end (m/s)
     done = 0
 
     def report():
@@ -383,46 +458,57 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
         xy = eng.pos.copy()
         if mirror:
             xy[:, 0] = W - xy[:, 0]
-        return Snapshot(index=k, step=eng.steps, throw_m=float(master.throw_at_slip(applied_dip)),
+        throw = float(master.throw_at_slip(applied_dip)) if master is not None else 0.0
+        return Snapshot(index=k, step=eng.steps, throw_m=throw,
                         ids=ids.copy(), xy=xy, radius=eng.radius.copy(), layer=layer.copy(),
                         deposited=deposited.copy())
 
-    def side_x(b: int, applied_dip: float) -> float:
-        """x of the side wall of end block b within the model height (inner-most point)."""
+    def side_x(right: bool, applied_dip: float, applied_end: float) -> float:
+        """x of the left or right side wall within the model height (inner-most point)."""
+        b = len(motions) - 1 if right else 0
         m = motions[b]
-        xw = 0.0 if b == 0 else W
+        xw = W if right else 0.0
+        shift = applied_end if right else 0.0   # the right wall follows the base's end
         if not m.rotates:
-            return xw + applied_dip * m.velocity[0]
+            return xw + applied_dip * m.velocity[0] + shift
         p = m.displace([[xw, 0.0], [xw, H]], applied_dip)[:, 0]
-        return float(p.max() if b == 0 else p.min())
+        return float(p.min() if right else p.max()) + shift
 
-    rot_walls = np.flatnonzero(np.isin(owner, rotating))
+    def placed(w: int, dip: float, end: float) -> np.ndarray:
+        return wall_ends(walls0[w], motions[owner[w]], anchor[w], W, dip, end)
+
+    # walls whose ends do not translate together are re-placed every ``chunk`` steps: those of
+    # rotating blocks and, on a stretching base, the pieces of the block tops
+    moving = np.isin(owner, rotating)
+    if stretch_total != 0.0:
+        moving |= np.isnan(anchor)
+    rot_walls = np.flatnonzero(moving)
     chunk = 50
 
-    def run_part(nsteps: int, start_dip: float) -> None:
-        """Run nsteps with the walls moving; rotating walls are re-placed every ``chunk``."""
-        if not rotating:
+    def run_part(nsteps: int, start_dip: float, start_end: float) -> None:
+        """Run nsteps with the walls moving; ``rot_walls`` are re-placed every ``chunk``."""
+        if rot_walls.size == 0:
             eng.run(nsteps)
             return
         left = nsteps
-        at = start_dip
+        at, at_end = start_dip, start_end
         while left > 0:
             k = min(chunk, left)
             nxt = at + k * eng.dt * v_dip
+            nxt_end = at_end + k * eng.dt * v_end
             for w in rot_walls:
-                m = motions[owner[w]]
-                ends = walls0[w].reshape(2, 2)
-                now = m.displace(ends, at)
-                then = m.displace(ends, nxt)
+                now = placed(w, at, at_end)
+                then = placed(w, nxt, nxt_end)
                 eng.walls[w] = now.ravel()
                 eng.wall_vel[w] = (then - now).mean(axis=0) / (k * eng.dt)
             eng._refresh_wall_candidates()
             eng.run(k)
             left -= k
-            at = nxt
+            at, at_end = nxt, nxt_end
 
     snaps = [snap(0, 0.0)]
     applied = 0.0
+    applied_end = 0.0
     for k in range(1, n_snapshots):
         grew = False
         q = steps_per_interval // 4
@@ -432,15 +518,19 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
                 vx, vy = motions[owner[w]].velocity
                 if vx != 0.0 or vy != 0.0:
                     eng.wall_vel[w] = (v_dip * vx, v_dip * vy)
-            run_part(nsteps, applied)
+                if v_end != 0.0 and not math.isnan(anchor[w]):
+                    eng.wall_vel[w, 0] += v_end * float(np.clip(anchor[w] / W, 0.0, 1.0))
+            run_part(nsteps, applied, applied_end)
             done += nsteps
             applied += nsteps * eng.dt * v_dip
+            applied_end += nsteps * eng.dt * v_end
             report()
             if part < 2:
                 erode()
             if part < 2 and sedimentation:
                 n_before = eng.n
-                added = _deposit(eng, side_x(0, applied), side_x(len(motions) - 1, applied), H,
+                added = _deposit(eng, side_x(False, applied, applied_end),
+                                 side_x(True, applied, applied_end), H,
                                  xy0, asm.radius, W, H, rng)
                 if added:
                     ids = np.concatenate([ids, np.arange(next_id, next_id + added)])

@@ -327,6 +327,12 @@ def _cross_checks(cfg: Config) -> None:
         )
     if cfg.grid.cell_m * 4 > min(cfg.model.width_m, cfg.model.height_m):
         raise ConfigError(f"grid.cell_m = {cfg.grid.cell_m:g} is too coarse for the model box")
+    # a basement without faults deforms only through its stretching base
+    if ("none" in _spec_candidates(cfg.sweep.params["structure"])
+            and 0.0 in _spec_candidates(cfg.sweep.params["base_stretch"])):
+        raise ConfigError("sweep.structure = 'none' (no basement fault) needs sweep.base_stretch "
+                          "!= 0, and base_stretch can be 0 in this sweep: nothing would deform "
+                          "the model")
     # every extreme value of every property parameter must make a valid PropertyModel
     for key in PROPERTY_FIELDS:
         spec = cfg.sweep.params[key]

@@ -23,9 +23,10 @@ def fault_distribution(path: str | Path) -> list[str]:
     if not {"structure", "n_basement_faults", "sample_in_run"} <= set(params):
         return []
     codes = dict(read_store_attrs(path)).get("param_codes") or param_codes()  # the store's own
-    first = params["sample_in_run"] == 0
+    # done shards only: every first sample is a finished run (n_basement_faults 0 is a run
+    # without basement fault, structure "none")
+    runs = params["sample_in_run"] == 0
     n_faults = params["n_basement_faults"]
-    runs = first & (n_faults > 0)
     if not runs.any():
         return ["basement faults: no finished run"]
     structures = Counter(codes["structure"][int(c)] for c in params["structure"][runs])

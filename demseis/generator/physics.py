@@ -23,7 +23,9 @@ combine the mechanics with the model's wall speed and the fault's dip and throw:
    (at the paper's damping 3e9 it was 0.41 v sin δ and the hanging wall detached; the default
    damping gives 4.1 v sin δ at 45°).
 3. Damping dissipates: the run lasts at least one kinetic-energy relaxation time of the
-   heaviest element, τ = m_max / η ≤ T = throw / (v sin δ).
+   heaviest element, τ = m_max / η ≤ T = max(throw / (v sin δ), |base_stretch| W / v) (a run
+   lasts the longer of its slip and its base stretch; without a basement fault,
+   ``structure = "none"``, only the stretch).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ import math
 from typing import Any
 
 from demseis.errors import ConfigError
-from demseis.generator.params import spec_values_hint
+from demseis.generator.params import Fixed, GridSpec, spec_values_hint
 
 #: largest wall speed as a fraction of the p-wave speed 2 sqrt(Kn / (πρ)) (rule 1)
 MAX_WALL_MACH = 1.0e-2
@@ -86,10 +88,27 @@ def check_physics(cfg: Any) -> None:
     m_max_hi = rho_hi * math.pi * m.radius_max_m**2
     dt_hi = 0.25 * math.sqrt(rho_hi * math.pi * m.radius_min_m**2 / kn_hi)
     tau = m_max_hi / (dt_hi * d_lo)
-    t_run = throw_lo / (v * sin_hi)
+    # a run lasts the longer of its slip and its base stretch (|base_stretch| * width) at v;
+    # a run without basement fault (structure "none") only the stretch
+    stretch = cfg.sweep.params["base_stretch"]
+    if isinstance(stretch, (Fixed, GridSpec)) or stretch.dist == "choice":
+        listed = (stretch.value,) if isinstance(stretch, Fixed) else stretch.values
+        stretch_lo = min(abs(float(x)) for x in listed)
+    else:                                  # a distribution: as close to 0 as its range allows
+        s_lo, s_hi = rng_of("base_stretch")
+        stretch_lo = 0.0 if s_lo <= 0.0 <= s_hi else min(abs(s_lo), abs(s_hi))
+    t_stretch = stretch_lo * m.width_m / v
+    spec = cfg.sweep.params["structure"]
+    structures = ((spec.value,) if isinstance(spec, Fixed) else
+                  spec.values if isinstance(spec, GridSpec) else tuple(spec.values or ()))
+    t_slip = throw_lo / (v * sin_hi)
+    t_run = min(max(t_slip, t_stretch), t_stretch if "none" in structures else math.inf)
     if tau > t_run:
+        what = (f"throw {throw_lo:g} m at {v:g} m/s and dip {dip_hi:g} deg"
+                if t_run == t_slip else
+                f"base stretch {stretch_lo:g} x width {m.width_m:g} m at {v:g} m/s")
         raise ConfigError(
             f"sweep.damping_scale down to {d_lo:g} is too weak: the heaviest element's "
             f"kinetic energy relaxes in m / eta = {tau:.3g} s, longer than the shortest run "
-            f"(throw {throw_lo:g} m at {v:g} m/s and dip {dip_hi:g} deg: {t_run:.3g} s), so "
-            "the run is dynamic; raise damping_scale or throw_m, or lower wall_speed_m_s")
+            f"({what}: {t_run:.3g} s), so the run is dynamic; raise damping_scale, throw_m or "
+            "|base_stretch|, or lower wall_speed_m_s")

@@ -16,6 +16,7 @@ import numpy as np
 from demseis.dem import BasementFault, FaultSystem, Material, NormalFault
 from demseis.dem.basement import draw_fault_system
 from demseis.dem.fault import as_system
+from demseis.errors import ConfigError
 from demseis.generator.config import Config
 from demseis.generator.layout import param_codes
 from demseis.generator.sampling import (SEED_FAULTS, SEED_PROPERTIES, SEED_STRATA, rng_at,
@@ -51,9 +52,10 @@ class RunInfo:
         return {f"fault{k}_throw_m": float(t) for k, t in enumerate(throws)}
 
     @property
-    def master(self) -> BasementFault:
-        """The fault whose x and throw are ``fault_x_m`` and ``throw_target_m``."""
-        return self.system.faults[self.system.master]
+    def master(self) -> BasementFault | None:
+        """The fault whose x and throw are ``fault_x_m`` and ``throw_target_m`` (None for a
+        run without basement faults, ``structure="none"``)."""
+        return self.system.faults[self.system.master] if self.system.faults else None
 
 
 def layer_thicknesses(cfg: Config, n_layers: int, cv: float, rng: np.random.Generator) -> np.ndarray | None:
@@ -79,9 +81,15 @@ def layer_thicknesses(cfg: Config, n_layers: int, cv: float, rng: np.random.Gene
 
 def fault_system_of(cfg: Config, params: dict[str, Any], run: int) -> NormalFault | FaultSystem:
     """The basement of a run: a :class:`NormalFault` for ``structure="single"`` and
-    ``fault_kind="normal"`` (placed by ``fault_x_frac``), else a :class:`FaultSystem`."""
+    ``fault_kind="normal"`` (placed by ``fault_x_frac``), else a :class:`FaultSystem` (without
+    faults for ``structure="none"``, which needs ``base_stretch != 0``)."""
     W = cfg.model.width_m
     structure, kind = str(params["structure"]), str(params["fault_kind"])
+    if structure == "none":
+        if float(params.get("base_stretch", 0.0)) == 0.0:
+            raise ConfigError("structure = 'none' (no basement fault) needs base_stretch != 0: "
+                              "with base_stretch = 0 nothing deforms the model")
+        return FaultSystem((), speed_m_s=cfg.model.wall_speed_m_s, structure="none")
     if structure == "single" and kind == "normal":
         return NormalFault(x_m=float(params["fault_x_frac"]) * W, dip_deg=float(params["dip_deg"]),
                            throw_m=float(params["throw_m"]),
@@ -116,8 +124,9 @@ def run_info(cfg: Config, params: dict[str, Any], run: int) -> RunInfo:
     """
     system = as_system(fault_system_of(cfg, params, run))
     codes = param_codes()
-    m = system.faults[system.master]
-    values: dict[str, float] = {"fault_x_m": m.x_m, "throw_target_m": m.throw_m,
+    m = system.faults[system.master] if system.faults else None
+    values: dict[str, float] = {"fault_x_m": m.x_m if m else ABSENT,
+                                "throw_target_m": m.throw_m if m else 0.0,
                                 "n_basement_faults": len(system.faults)}
     for k in range(MAX_BASEMENT_FAULTS):
         f = system.faults[k] if k < len(system.faults) else None

@@ -145,7 +145,7 @@ def test_draw_fault_system_every_structure_is_valid():
             s = B.draw_fault_system(rng, 5000.0, structure=st, n_faults=n, spacing_frac=0.15)
             B.validate_system(s, 5000.0)
             assert s.structure == st
-            assert len(s.faults) == {"domino": n, "graben": 2, "horst": 2}.get(st, 1)
+            assert len(s.faults) == {"domino": n, "graben": 2, "horst": 2, "none": 0}.get(st, 1)
 
 
 # ------------------------------------------------------------------ the DEM under each BC

@@ -30,6 +30,13 @@ if sys.argv[1] == "dem":
     snaps = simulate(asm, NormalFault(x_m=300.0, dip_deg=60.0, throw_m=40.0), n_snapshots=2, rng=2)
     out["n"] = snaps[-1].n
     out["dem"] = hashlib.sha256(b"".join(s.xy.tobytes() for s in snaps)).hexdigest()
+if sys.argv[1] == "stretch":
+    from demseis.dem import FaultSystem, Material
+    asm = build_assembly(600.0, 300.0, radius_min_m=10.0, radius_max_m=20.0, n_layers=4, rng=1)
+    snaps = simulate(asm, FaultSystem((), structure="none"), Material(model="brittle",
+                     cohesion_n=6e8), n_snapshots=2, rng=2, base_stretch=0.15)
+    out["n"] = snaps[-1].n
+    out["dem"] = hashlib.sha256(b"".join(s.xy.tobytes() for s in snaps)).hexdigest()
 print(json.dumps(out))
 """
 
@@ -95,3 +102,12 @@ def test_detmath_accuracy():
         detmath.log(-1.0)
     with pytest.raises(ValueError):
         detmath.sin(3.0)
+
+
+@pytest.mark.slow
+def test_stretching_base_bits_equal_on_emulated_other_cpu(tmp_path):
+    """A stretching base (its pieces re-placed every 50 steps from NumPy arithmetic): same
+    positions with NumPy SIMD off and glibc FMA off (Numba's cache kept)."""
+    here = _run("stretch")
+    other = _run("stretch", _other_cpu_env(False, str(tmp_path)))
+    assert here == other

@@ -92,3 +92,13 @@ def test_fault_distribution_counts_runs(tmp_path):
     assert "graben: 1" in lines[1] and "half_graben: 1" in lines[1] and "single" not in lines[1]
     assert lines[2].split(None, 1)[1] == "1: 1, 2: 1"
     assert "listric: 1, normal: 2 (3 faults)" in lines[3]
+    # a run without basement fault (structure "none") counts as a run with 0 faults
+    none = param_codes()["structure"].index("none")
+    write_shard(path, 2, {"fault": np.zeros((2, 4, 4), np.uint8)},
+                {name: np.array([none, none] if name == "structure" else
+                                [0, 1] if name == "sample_in_run" else [0, 0] if
+                                name == "n_basement_faults" else [-1, -1], np.int8)
+                 for name in cols})
+    lines = fault_distribution(tmp_path / "s.zarr")
+    assert lines[0] == "basement faults over 3 runs:"
+    assert "none: 1" in lines[1] and lines[2].split(None, 1)[1] == "0: 1, 1: 1, 2: 1"

@@ -31,6 +31,9 @@ def test_examples_pass():
      ["damping_scale", "detaches"]),
     # 1 m of throw at 5 m/s is over before the heaviest element's energy has relaxed
     ({"sweep": {"throw_m": 1.0, "dip_deg": 45.0}}, ["damping_scale", "dynamic", "throw"]),
+    # without a basement fault a run lasts its base stretch: 0.001 x 2500 m at 5 m/s is 0.5 s
+    ({"sweep": {"structure": "none", "base_stretch": 0.001}},
+     ["damping_scale", "dynamic", "base stretch"]),
 ])
 def test_degenerate_physics_refused(raw, words):
     with pytest.raises(ConfigError) as exc:
@@ -82,3 +85,14 @@ def test_run_without_fault_is_recorded(tmp_path, capsys):
     import zarr
 
     assert not np.any(zarr.open_group(str(out), mode="r")["fault"][:])
+
+
+def test_a_long_stretch_makes_a_short_throw_quasi_static():
+    """A run lasts the longer of its slip and its base stretch: 1 m of throw passes with a
+    0.1 stretch, and so does a run without basement fault whose stretch lasts long enough."""
+    parse_config({"sweep": {"throw_m": 1.0, "dip_deg": 45.0, "base_stretch": 0.1}})
+    parse_config({"sweep": {"structure": "none", "base_stretch": -0.05}})
+    parse_config({"sweep": {"structure": "none", "base_stretch": [0.1, -0.1]}})
+    with pytest.raises(ConfigError, match="dynamic"):   # a range through 0 draws near-0 runs
+        parse_config({"sweep": {"structure": "none",
+                                "base_stretch": {"dist": "uniform", "low": -0.1, "high": 0.1}}})

@@ -74,18 +74,23 @@ class DemEngine:
         dip_lo = spec_values_hint(cfg.sweep.params["dip_deg"])[0]
         kn_lo = spec_values_hint(cfg.sweep.params["kn_n_m"])[0]
         rho_hi = spec_values_hint(cfg.sweep.params["density_kg_m3"])[1]
+        stretch_lo, stretch_hi = spec_values_hint(cfg.sweep.params["base_stretch"])
         dt = time_step(a, rho_hi, kn_lo)
-        steps = throw_hi / math.sin(math.radians(dip_lo)) / m.wall_speed_m_s / dt
+        path = max(throw_hi / math.sin(math.radians(dip_lo)),
+                   max(abs(stretch_lo), abs(stretch_hi)) * m.width_m)
+        steps = path / m.wall_speed_m_s / dt
         secs = n_elem * (steps / DRY_RUN_ELEMENT_STEPS_PER_S + DRY_RUN_SETTLE_S_PER_ELEMENT)
         return f"~{n_elem:,.0f} elements each", secs
 
     def cost(self, cfg: Config, params: Mapping[str, Any]) -> float:
-        """Integrator steps to the target throw plus settling: path along dip / wall speed / dt,
-        with the DEM's own time step (:func:`demseis.dem.time_step`); the element count is the
-        same for every run of a sweep."""
+        """Integrator steps to the target throw plus settling: path along dip (or the base's
+        stretch, if longer) / wall speed / dt, with the DEM's own time step
+        (:func:`demseis.dem.time_step`); the element count is the same for every run of a
+        sweep."""
         m = cfg.model
         dt = time_step(m.radius_min_m, params["density_kg_m3"], params["kn_n_m"])
-        path_m = params["throw_m"] / math.sin(math.radians(params["dip_deg"]))
+        path_m = max(params["throw_m"] / math.sin(math.radians(params["dip_deg"])),
+                     abs(float(params.get("base_stretch", 0.0))) * m.width_m)
         return (path_m / m.wall_speed_m_s + 4.0) / dt
 
     def simulate(self, cfg: Config, spec: RunSpec,
@@ -111,13 +116,15 @@ class DemEngine:
                                          rng_at(cfg, spec.run, SEED_PROPERTIES)).lithology
             layers = layer_materials([model.lithologies[k] for k in lith], material,
                                      float(p["strength_contrast"]))
-        # uplift (reverse and listric faults) is eroded at the top of the sample grid
-        uplift = not isinstance(fault, NormalFault) and any(
-            f.kind != "normal" for f in fault.faults)
+        # uplift (reverse and listric faults, a shortening base) is eroded at the top of the
+        # sample grid
+        stretch = float(p["base_stretch"])
+        uplift = stretch < 0 or (not isinstance(fault, NormalFault) and any(
+            f.kind != "normal" for f in fault.faults))
         snaps = simulate(asm, fault, material, n_snapshots=cfg.model.n_snapshots,
                          sedimentation=cfg.model.sedimentation, rng=rng, progress=progress,
                          erosion_level_m=cfg.model.height_m if uplift else None,
-                         layer_materials=layers)
+                         layer_materials=layers, base_stretch=stretch)
         return EngineRun(spec=spec, info=info, snapshots=tuple(snaps))
 
     def states(self, cfg: Config, run: EngineRun, snapshots: Sequence[int]) -> Iterator[State]:

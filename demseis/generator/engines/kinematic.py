@@ -342,7 +342,7 @@ class KinematicEngine:
             sigma = float(p["gaussian_sigma_cells"])
             if sigma > 0:
                 vp_g, rho_g = gaussian_filter(vp_g, sigma), gaussian_filter(rho_g, sigma)
-            values = {"step": k, "throw_m": fraction * run.info.master.throw_m, "n_elements": 0,
+            values = {"step": k, "throw_m": fraction * run.info.values["throw_target_m"], "n_elements": 0,
                       **run.info.throws_at(k, n_snap)}
             reference = None
             if cfg.output.rendering == "strata":
