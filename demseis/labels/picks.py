@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from demseis.errors import InputError
 from demseis.labels import _kernels as _k
 
 #: the maps :func:`pick_faults` replaces
@@ -70,7 +71,7 @@ def throw_samples(slip_m: np.ndarray, dip_deg: np.ndarray, *, cell_m: float | No
                                                                                   np.float64)))
     if vp_m_s is None:
         if cell_m is None:
-            raise ValueError("throw_samples needs cell_m (depth) or vp_m_s and dt_s (time)")
+            raise InputError("throw_samples needs cell_m (depth) or vp_m_s and dt_s (time)")
         return throw_m / float(cell_m)
     vp = np.asarray(vp_m_s, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):

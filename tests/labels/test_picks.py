@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
+from demseis.errors import InputError
 from demseis.labels import PickConfig, loop_count, pick_faults, rung_fraction, throw_samples
 from demseis.labels._kernels import thin_path
 from demseis.labels.picks import draw_path, fault_polylines
@@ -113,7 +114,7 @@ def test_throw_samples_in_depth_and_time():
     np.testing.assert_allclose(throw_samples(slip, dip, vp_m_s=np.array([2500.0]), dt_s=0.004),
                                [2.0])
     assert throw_samples(slip, dip, vp_m_s=np.array([0.0]), dt_s=0.004)[0] == 0.0   # no rock
-    with pytest.raises(ValueError):
+    with pytest.raises(InputError, match="cell_m"):
         throw_samples(slip, dip)
 
 
