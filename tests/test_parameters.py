@@ -111,8 +111,6 @@ GENERATOR_ONLY = {"seed", "n_runs", "renders_per_snapshot", "fault_x_frac", "n_l
                   # the kinematic engine's geometry (demseis.generator.engines.kinematic)
                   "fold_amplitude_m", "throw_taper", "population_faults",
                   "population_throw_exponent",
-                  # distributed extension (the DEM's stretching base, the kinematic population)
-                  "base_stretch",
                   # survey sampling and the strata rendering (demseis.generator.survey)
                   "trace_spacing_m", "strata_dz_m", "fault_zone_impedance"}
 NUMERIC = sorted(k for k, p in PARAMS.items() if p.kind in (int, float))
