@@ -68,8 +68,11 @@ def main(argv: list[str] | None = None) -> int:
             "benchmark": "labels_picks", "case": "store_shape", "store": args.store,
             "samples": len(counts),
             "instance_loops": int(sum(c["instance_loops"] for c in counts)),
-            "loops_of_the_union": int(sum(c["loops"] for c in counts)),
-            "max_rung_fraction": float(np.max([c["rung_fraction"] for c in counts]))}))
+            "samples_with_a_loop_of_the_union": int(sum(c["loops"] > 0 for c in counts)),
+            "max_instance_rung_fraction": float(np.max([c["instance_rung_fraction"]
+                                                        for c in counts])),
+            "max_rung_fraction_of_the_union": float(np.max([c["rung_fraction"]
+                                                            for c in counts]))}))
     return 0
 
 

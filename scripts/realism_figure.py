@@ -1,7 +1,8 @@
 """docs/figures/realism_quick.png and the table of docs/realism.md: a store beside F3.
 
 Runs `demseis.evaluation.realism.realism_report` on a store and the F3 field section
-(../shared/field/f3_inline.sgy), draws `demseis.plotting.plot_realism` with the F3 licence
+(by default the project's field reference, ../shared/field/f3_inline.sgy beside the
+checkout), draws `demseis.plotting.plot_realism` with the F3 licence
 line under it, and prints the report's Markdown table (what docs/realism.md shows):
 
     demseis generate --preset quick --out /tmp/quick.zarr --workers 1

@@ -127,12 +127,23 @@ def kinematic_agreement(cfg: Config, runs: list[int]) -> list[dict[str, float]]:
 
 
 def shape_counts(fault: np.ndarray, fault_id: np.ndarray) -> dict[str, float]:
-    """Loops and flat rungs of one sample's fault label: ``loops`` (closed loops of the whole
-    mask), ``instance_loops`` (summed over the faults one by one) and ``rung_fraction``
-    (:func:`demseis.labels.rung_fraction`, 0 for an empty label)."""
+    """Loops and flat rungs of one sample's fault label.
+
+    ``loops``: closed loops of the whole mask (two faults that cross twice, or a splay that
+    rejoins its fault, enclose one); ``instance_loops``: summed over the faults one by one;
+    ``rung_fraction``: :func:`demseis.labels.rung_fraction` of the whole mask (its direction
+    fit also sees two neighbouring faults' ends); ``instance_rung_fraction``: the share of
+    label pixels whose own fault's line is within 12 degrees of horizontal over 9 x 9 pixels.
+    Both fractions are 0 for an empty label.
+    """
     mask = np.asarray(fault) > 0
-    ids = np.unique(np.asarray(fault_id)[mask])
-    rung = rung_fraction(mask) if mask.any() else 0.0
+    fid = np.asarray(fault_id)
+    ids = np.unique(fid[mask])
+    if not mask.any():
+        return {"loops": 0, "instance_loops": 0, "rung_fraction": 0.0,
+                "instance_rung_fraction": 0.0}
+    flat = sum(rung_fraction(mask & (fid == k)) * int((mask & (fid == k)).sum()) for k in ids)
     return {"loops": loop_count(mask),
-            "instance_loops": int(sum(loop_count(np.asarray(fault_id) == k) for k in ids)),
-            "rung_fraction": float(rung)}
+            "instance_loops": int(sum(loop_count(mask & (fid == k)) for k in ids)),
+            "rung_fraction": float(rung_fraction(mask)),
+            "instance_rung_fraction": float(flat / mask.sum())}

@@ -1,4 +1,4 @@
-"""How much a section looks like a survey's: the measures of ../shared/field/README.md and more.
+"""How much a section looks like a survey's: the measures of the project's field reference and more.
 
 Every function takes a (samples, traces) section (time rows, trace columns) and, for a
 synthetic section, its fault label, so that the measures are taken in intact rock:
@@ -408,14 +408,14 @@ def throws_m(fault: np.ndarray, slip_m: np.ndarray, dip_deg: np.ndarray) -> np.n
 FIELD_TARGETS: dict[str, dict] = {
     "dominant_period_samples": {
         "low": None, "high": None, "median": 7.0, "text": "~7 (4 ms)",
-        "source": "hand-picked field sections (../shared/field/README.md): a dominant period of "
+        "source": "hand-picked field sections (seven 2D time sections, 4 ms): a dominant period of "
                   "about 7 samples at 4 ms, 25 zero crossings per 76 samples"},
     "zero_crossings_per_100": {
         "low": None, "high": None, "median": 34.0, "text": "~34 (F3)",
-        "source": "F3 inline at 4 ms, measured as here (../shared/field/README.md)"},
+        "source": "F3 inline at 4 ms, measured as here"},
     "adjacent_trace_correlation": {
         "low": None, "high": None, "median": 0.92, "text": "0.92 (F3)",
-        "source": "F3 inline at 4 ms, measured as here (../shared/field/README.md)"},
+        "source": "F3 inline at 4 ms, measured as here"},
     "apparent_dip_deg": {
         "low": 81.0, "high": 88.0, "median": 85.0, "text": "81-88, median 85",
         "source": "faults picked by hand on seven 2D time sections of a field survey (4 ms, "
@@ -430,7 +430,7 @@ FIELD_TARGETS: dict[str, dict] = {
 }
 """Targets from field statistics, printed beside a store's measures by :func:`realism_report`.
 
-They are hand-picked, published or measured values (../shared/field/README.md), not computed
+They are hand-picked, published or measured values (the project's field reference), not computed
 here: the hand-picked sections cannot be shared, and F3 has no fault labels, so the label
 measures (dip, faults per 100 traces, label fraction) can only be compared with these numbers.
 ``low``/``high`` bound a range (10th-90th percentile or min-max), ``median`` is a central
@@ -744,8 +744,8 @@ def _header(report: dict) -> list[str]:
     return lines
 
 
-_FOOT = ("target: from field statistics (../shared/field/README.md; hand-picked sections and "
-         "F3, not computed here); distributions: median (p10-p90)")
+_FOOT = ("target: from field statistics (hand-picked field sections and F3, not computed "
+         "here); distributions: median (p10-p90)")
 
 
 def format_report(report: dict) -> str:

@@ -71,5 +71,21 @@ def test_picked_dem_labels_have_no_loops_or_rungs(tiny_store):
         counts = shape_counts(s["fault"], s["fault_id"])
         seen += int(s["fault"].any())
         assert counts["instance_loops"] == 0, i
+        assert counts["instance_rung_fraction"] == 0.0, i
         assert counts["rung_fraction"] == 0.0, i
     assert seen > 0
+
+
+def test_shape_counts_see_a_loop_and_a_rung():
+    mask = np.zeros((40, 40), np.uint8)
+    fid = np.zeros((40, 40), np.int16)
+    mask[5:35, 10] = 1
+    mask[5:35, 20] = 1
+    mask[20, 10:21] = 1                    # a flat rung between two lines, one fault
+    fid[mask > 0] = 1
+    counts = shape_counts(mask, fid)
+    assert counts["instance_rung_fraction"] > 0.1 and counts["rung_fraction"] > 0.1
+    ring = np.zeros((40, 40), np.uint8)
+    ring[10, 10:30] = ring[30, 10:30] = ring[10:31, 10] = ring[10:31, 29] = 1
+    assert shape_counts(ring, ring.astype(np.int16))["instance_loops"] == 1
+    assert shape_counts(np.zeros((5, 5)), np.zeros((5, 5)))["loops"] == 0
