@@ -23,8 +23,8 @@ from demseis.generator.config import Config, stored_config
 from demseis.generator.engines import get_engine, require_particles, run_from_particles
 from demseis.generator.render import render_run
 from demseis.generator.sampling import plan_run
-from demseis.labels import LabelConfig
 from demseis.generator.sweep import SweepSummary, _progress_bar, prepare_store
+from demseis.labels import LabelConfig
 
 
 def rerender_config(source_cfg: dict[str, Any], freqs_hz: list[float], snrs_db: list[float],
@@ -80,7 +80,7 @@ def relabel_config(source_cfg: dict[str, Any], labels: dict[str, Any]) -> Config
     the same runs, renders and noise seeds give byte-identical seismic)."""
     raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in source_cfg.items()}
     # keys not given take today's defaults (the picked fault target), not the source's
-    raw["labels"] = {k: getattr(LabelConfig(), k) for k in ("fault_style",)} | dict(labels)
+    raw["labels"] = {"fault_style": LabelConfig().fault_style, **labels}
     return stored_config(raw, source="relabel config")
 
 
