@@ -15,6 +15,10 @@ drawn in the middle of the section, half-length ``L = 0.6 height``). Faults are 
 first; a sample is computed backwards, youngest fault first, by mapping every present cell to
 where its rock came from, so older faults are offset by younger ones.
 
+With ``base_stretch`` != 0 a fault population (:func:`population`) that takes up the same
+extension or shortening is added, older than the basement faults: the kinematic counterpart of
+the DEM's stretching base.
+
 Snapshot ``k`` of ``n_snapshots`` holds the fraction ``k / (n - 1)`` of every throw, so a run
 has the same samples as a DEM run. Each snapshot is a
 :class:`~demseis.generator.engines.State` whose properties and labels go through the imaging,
