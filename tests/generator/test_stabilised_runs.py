@@ -87,6 +87,15 @@ def test_a_run_unstable_on_every_try_fails_naming_each_cause(monkeypatch):
     assert "stabilised try 2 (wall speed 0.25 m/s): kinetic-energy blow-up at step 300" in text
 
 
+def test_no_stabilised_try_below_the_slowest_declared_wall_speed(monkeypatch):
+    speeds = _unstable(monkeypatch, 3)
+    with pytest.raises(SimulationError, match=r"\(as configured \(0.0015 m/s\): kinetic-energy "
+                       r"blow-up at step 100; no stabilised try 1 \(wall speed 0.00075 m/s\): "
+                       r"below the slowest wall speed 0.001 m/s\)"):
+        run_shard(_minute_cfg(wall_speed_m_s=0.0015), 0)
+    assert speeds == [0.0015]
+
+
 def test_sweep_reports_stabilised_runs_and_render_keeps_their_try(tmp_path, monkeypatch, capsys):
     """The sweep names the stabilised runs and exits 0; `demseis render` from their particles
     stores the source's dem_attempt, and a store from before the stabilised tries (no

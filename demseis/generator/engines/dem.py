@@ -32,6 +32,7 @@ from demseis.generator.runsetup import (RunInfo, fault_system_of, layer_thicknes
                                         property_model_of, run_info, run_properties, run_strata)
 from demseis.generator.sampling import SEED_DEM, SEED_LAYERS, SEED_PROPERTIES, RunSpec, rng_at
 from demseis.labels import displacement_history, label_maps, strain_history
+from demseis.parameters import PARAMS
 from demseis.seismic import (LayerProperties, Strata, draw_layer_properties, element_properties,
                              property_grids)
 from demseis.types import Snapshot
@@ -129,6 +130,10 @@ class DemEngine:
         causes = []
         for attempt in range(STABILISED_TRIES + 1):
             speed = fault.speed_m_s / 2**attempt
+            if speed < PARAMS["wall_speed_m_s"].lo:
+                causes.append(f"no {_try_name(attempt, speed)}: below the slowest wall speed "
+                              f"{PARAMS['wall_speed_m_s'].lo:g} m/s")
+                break
             try_rng = copy.deepcopy(rng)   # every try deposits the same sediment draws
             try:
                 snaps = simulate(asm, dataclasses.replace(fault, speed_m_s=speed), material,
