@@ -141,3 +141,25 @@ def test_variety_run_46_is_stabilised_on_its_first_retry():
     run = dem_engine.ENGINE.simulate(cfg, plan_run(cfg, 46))
     assert run.info.values["dem_attempt"] == 1
     assert len(run.snapshots) == cfg.model.n_snapshots
+
+
+def test_stability_benchmark_counts_the_tries(tmp_path, monkeypatch, capsys):
+    """benchmarks/stability.py prints one JSON line counting runs by how they finished."""
+    import json
+    import runpy
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "stability.py"
+    main = runpy.run_path(str(script))["main"]
+    cfg = tmp_path / "m.toml"
+    cfg.write_text(MINUTE)
+    _unstable(monkeypatch, 1)
+    assert main(["--preset", "tiny", "--config", str(cfg), "--runs", "2"]) == 0
+    line = json.loads(capsys.readouterr().out)
+    assert line["runs"] == 2 and line["as_configured"] == 0 and line["failed"] == 0
+    assert line["stabilised_runs"] == {"0": 1, "1": 1}
+    monkeypatch.undo()
+    _unstable(monkeypatch, 3)
+    assert main(["--preset", "tiny", "--config", str(cfg), "--start", "1", "--runs", "1"]) == 0
+    line = json.loads(capsys.readouterr().out)
+    assert line["failed"] == 1 and "every try went unstable" in line["failed_runs"]["1"]
