@@ -422,6 +422,9 @@ STORED: tuple[Stored, ...] = (
     Stored("has_fault", "uint8", "snapshot", "", "1 if the fault label has any fault cell"),
     Stored("n_faults", "int16", "snapshot", "", "fault instances in the label"),
     Stored("max_slip_m", "float32", "snapshot", "m", "largest slip on the labelled traces"),
+    Stored("dem_attempt", "int8", "run", "", "0: the DEM run as configured (always 0 for the "
+           "kinematic engine); k >= 1: it went unstable k times and was rerun stabilised, the "
+           "basement at wall_speed_m_s / 2^k"),
 ) + tuple(
     Stored(f"fault{k}_{field}", dtype, level, unit, f"basement fault {k} (by x): {doc}; -1 if "
            "the run has fewer faults")

@@ -12,6 +12,7 @@ import numpy as np
 from demseis.datasets import (
     finalize_store,
     open_store,
+    read_done_params,
     read_particles,
     record_failures,
     shard_status,
@@ -113,6 +114,7 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
         raise StoreError("--out must differ from the source store")
     require_particles(cfg, "render/relabel")
     src_status = shard_status(src)
+    attempts = _dem_attempts(src)
     status = prepare_store(cfg, out, overwrite=overwrite)
     pending = [int(i) for i in np.flatnonzero(status != 1)]
     summary = SweepSummary(store=str(out), n_shards=len(status), samples_per_shard=cfg.samples_per_run,
@@ -123,7 +125,8 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
             if src_status[run] != 1:
                 summary.failed[run] = "not done in the source store"
                 continue
-            result = run_from_particles(cfg, plan_run(cfg, run), read_particles(src, run))
+            result = run_from_particles(cfg, plan_run(cfg, run), read_particles(src, run),
+                                        attempts.get(run, 0))
             data = render_run(cfg, result, get_engine(cfg.model.engine))
             write_shard(out, run, data.arrays, data.params, data.snapshots)
             summary.completed.append(run)
@@ -134,3 +137,12 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
     finalize_store(out)
     summary.seconds = time.perf_counter() - t0
     return summary
+
+
+def _dem_attempts(src: Path) -> dict[int, int]:
+    """``dem_attempt`` of every done run of ``src`` (run -> try); a store written before the
+    DEM's stabilised tries has no such parameter: its runs all ran as configured (0)."""
+    done = read_done_params(src, ["run_id", "dem_attempt"])
+    if "dem_attempt" not in done.values:
+        return {}
+    return {int(r): int(a) for r, a in zip(done.values["run_id"], done.values["dem_attempt"])}

@@ -70,6 +70,9 @@ class SweepSummary:
     failed: dict[int, str] = field(default_factory=dict)
     #: runs written now whose last snapshot has no fault pixel (the DEM made no fault)
     no_fault: list[int] = field(default_factory=list)
+    #: runs written now that went unstable and finished on a stabilised try: run -> its
+    #: ``dem_attempt`` (demseis.generator.engines.dem.STABILISED_TRIES)
+    stabilised: dict[int, int] = field(default_factory=dict)
     seconds: float = 0.0
     #: seconds from the first task submitted to the last finished (no cluster start-up)
     compute_seconds: float = 0.0
@@ -96,14 +99,19 @@ class SweepSummary:
         if self.no_fault:
             out.append(f"{len(self.no_fault)} run(s) ended with no fault (no fault pixel in the "
                        "last snapshot): " + ", ".join(str(r) for r in sorted(self.no_fault)))
+        if self.stabilised:
+            out.append(f"{len(self.stabilised)} run(s) went unstable and finished on a stabilised "
+                       "try (slower basement; stored as dem_attempt): "
+                       + ", ".join(f"{r} (try {a})" for r, a in sorted(self.stabilised.items())))
         for shard, err in sorted(self.failed.items()):
             out.append(f"  run {shard} failed: {err}")
         unstable = [e for e in self.failed.values() if e.startswith("SimulationError")]
         if unstable:
             # the same config and seed give the same bits, so a rerun fails the same way
-            out.append("a DEM run that went unstable fails the same way when rerun: change its "
-                       "config (lower model.wall_speed_m_s, or raise sweep.damping_scale, or "
-                       "narrow the swept ranges) and write a new --out")
+            out.append("a DEM run that went unstable on every try (as configured and at a slower "
+                       "basement) fails the same way when rerun: change its config (lower "
+                       "model.wall_speed_m_s, or raise sweep.damping_scale, or narrow the swept "
+                       "ranges) and write a new --out")
         if len(unstable) < len(self.failed):
             out.append("rerun the same command to retry the runs that failed for another reason")
         return out
@@ -234,6 +242,7 @@ def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, An
     last = snapshot == snapshot.max()
     return {"shard": shard, "seconds": t3 - t0, "samples": int(data.arrays["seismic"].shape[0]),
             "no_fault": not bool(np.any(data.arrays["fault"][last])), "pid": os.getpid(),
+            "dem_attempt": int(np.max(data.params["dem_attempt"])),
             "start": start, "end": time.time(), "engine_s": timings.get("engine_s", 0.0),
             "render_s": timings.get("render_s", 0.0), "write_s": t3 - t2,
             "cpu_s": time.thread_time() - c0}
@@ -387,6 +396,8 @@ def _account(summary: SweepSummary, bar: Any, result: dict[str, Any]) -> None:
         summary.completed.append(result["shard"])
         if result.get("no_fault"):
             summary.no_fault.append(result["shard"])
+        if result.get("dem_attempt"):
+            summary.stabilised[result["shard"]] = result["dem_attempt"]
         bar.update(result["samples"])
 
 

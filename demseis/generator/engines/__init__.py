@@ -24,6 +24,7 @@ A new engine is one registration (``ENGINES.register("name", engine)``), after w
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
+import dataclasses
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
@@ -143,11 +144,14 @@ def require_particles(cfg: Config, what: str) -> None:
                          "generate` with the settings you want instead")
 
 
-def run_from_particles(cfg: Config, spec: RunSpec, snapshots: Sequence[Snapshot]) -> EngineRun:
-    """The :class:`EngineRun` of stored particle snapshots (re-rendering, relabelling)."""
+def run_from_particles(cfg: Config, spec: RunSpec, snapshots: Sequence[Snapshot],
+                       dem_attempt: int = 0) -> EngineRun:
+    """The :class:`EngineRun` of stored particle snapshots (re-rendering, relabelling);
+    ``dem_attempt``: the try of the DEM that made them (the source store's value)."""
     require_particles(cfg, "re-rendering")
-    return EngineRun(spec=spec, info=run_info(cfg, spec.params, spec.run),
-                     snapshots=tuple(snapshots))
+    info = run_info(cfg, spec.params, spec.run)
+    info = dataclasses.replace(info, values={**info.values, "dem_attempt": int(dem_attempt)})
+    return EngineRun(spec=spec, info=info, snapshots=tuple(snapshots))
 
 
 __all__ = ["ENGINES", "Engine", "EngineRun", "State", "get_engine", "require_particles",

@@ -10,6 +10,8 @@ the run's beds (:func:`dem_strata`).
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from functools import partial
@@ -17,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from demseis.errors import ConfigError
+from demseis.errors import ConfigError, SimulationError
 from demseis.dem import NormalFault, build_assembly, simulate, time_step
 from demseis.dem.reference import reference_map
 from demseis.dem.strata import layer_materials
@@ -26,10 +28,11 @@ from demseis.generator.engines import EngineRun, State
 from demseis.generator.layout import grid_of
 from demseis.generator.params import spec_values_hint
 from demseis.generator.physics import check_physics
-from demseis.generator.runsetup import (fault_system_of, layer_thicknesses, material_of,
+from demseis.generator.runsetup import (RunInfo, fault_system_of, layer_thicknesses, material_of,
                                         property_model_of, run_info, run_properties, run_strata)
 from demseis.generator.sampling import SEED_DEM, SEED_LAYERS, SEED_PROPERTIES, RunSpec, rng_at
 from demseis.labels import displacement_history, label_maps, strain_history
+from demseis.parameters import PARAMS
 from demseis.seismic import (LayerProperties, Strata, draw_layer_properties, element_properties,
                              property_grids)
 from demseis.types import Snapshot
@@ -39,6 +42,9 @@ from demseis.types import Snapshot
 DRY_RUN_ELEMENT_STEPS_PER_S = 2.0e7
 DRY_RUN_SETTLE_S_PER_ELEMENT = 1.4e-3
 DRY_RUN_PACKING = 0.86
+#: reruns of a run that went unstable; try k runs the basement at ``wall_speed_m_s / 2**k``
+#: (closer to quasi-static; the tries after the first take 2, 4, ... times the steps)
+STABILISED_TRIES = 2
 
 
 class DemEngine:
@@ -95,7 +101,14 @@ class DemEngine:
 
     def simulate(self, cfg: Config, spec: RunSpec,
                  progress: Callable[[float], None] | None = None) -> EngineRun:
-        """Build the assembly of run ``spec.run`` and fault it."""
+        """Build the assembly of run ``spec.run`` and fault it.
+
+        A run that goes unstable (:class:`~demseis.errors.SimulationError`) is run again from
+        the same assembly and seeds with the basement at half the wall speed, up to
+        :data:`STABILISED_TRIES` times (try k: ``wall_speed_m_s / 2**k``); the try that
+        finished is stored as ``dem_attempt``. Only when every try goes unstable is the run's
+        error raised, naming each try's cause.
+        """
         p = spec.params
         material = material_of(p)
         thick = layer_thicknesses(cfg, int(p["n_layers"]), float(p["layer_thickness_cv"]),
@@ -121,11 +134,27 @@ class DemEngine:
         stretch = float(p["base_stretch"])
         uplift = stretch < 0 or (not isinstance(fault, NormalFault) and any(
             f.kind != "normal" for f in fault.faults))
-        snaps = simulate(asm, fault, material, n_snapshots=cfg.model.n_snapshots,
-                         sedimentation=cfg.model.sedimentation, rng=rng, progress=progress,
-                         erosion_level_m=cfg.model.height_m if uplift else None,
-                         layer_materials=layers, base_stretch=stretch)
-        return EngineRun(spec=spec, info=info, snapshots=tuple(snaps))
+        causes = []
+        for attempt in range(STABILISED_TRIES + 1):
+            speed = fault.speed_m_s / 2**attempt
+            if speed < PARAMS["wall_speed_m_s"].lo:
+                causes.append(f"no {_try_name(attempt, speed)}: below the slowest wall speed "
+                              f"{PARAMS['wall_speed_m_s'].lo:g} m/s")
+                break
+            try_rng = copy.deepcopy(rng)   # every try deposits the same sediment draws
+            try:
+                snaps = simulate(asm, dataclasses.replace(fault, speed_m_s=speed), material,
+                                 n_snapshots=cfg.model.n_snapshots,
+                                 sedimentation=cfg.model.sedimentation, rng=try_rng,
+                                 progress=progress,
+                                 erosion_level_m=cfg.model.height_m if uplift else None,
+                                 layer_materials=layers, base_stretch=stretch)
+            except SimulationError as exc:
+                causes.append(f"{_try_name(attempt, speed)}: {exc}")
+                continue
+            info = RunInfo(info.system, {**info.values, "dem_attempt": attempt})
+            return EngineRun(spec=spec, info=info, snapshots=tuple(snaps))
+        raise SimulationError(f"every try went unstable ({'; '.join(causes)})")
 
     def states(self, cfg: Config, run: EngineRun, snapshots: Sequence[int]) -> Iterator[State]:
         """Rock properties and labels of each wanted particle snapshot.
@@ -157,6 +186,13 @@ class DemEngine:
                                                             grid.top_m)
             yield State(snapshot=k, vp_m_s=vp_g, rho_kg_m3=rho_g, labels=labels, values=values,
                         reference=reference, strata=strata)
+
+
+def _try_name(attempt: int, speed_m_s: float) -> str:
+    """How try ``attempt`` of a run is named in its error."""
+    if attempt == 0:
+        return f"as configured ({speed_m_s:g} m/s)"
+    return f"stabilised try {attempt} (wall speed {speed_m_s:g} m/s)"
 
 
 def dem_strata(cfg: Config, run: EngineRun, snaps: Sequence[Snapshot], props: LayerProperties,
