@@ -193,6 +193,19 @@ def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
     return written
 
 
+def _deformation(p: dict) -> str:
+    """What deformed a sample: its basement fault's dip and throw so far, and the base's
+    stretch (a run without a basement fault has only the stretch)."""
+    stretch = float(p.get("base_stretch", 0.0))
+    parts = []
+    if int(p.get("n_basement_faults", 1)) > 0:
+        parts.append(f"dip {float(p['dip_deg']):.0f}°, throw so far {float(p['throw_m']):.0f} m")
+    if stretch != 0.0:
+        parts.append(f"base {'stretched' if stretch > 0 else 'shortened'} by "
+                     f"{100 * abs(stretch):.1f} %")
+    return ", ".join(parts)
+
+
 def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     """One stored sample: the section, its fault label over it, and the damage-zone map."""
     import matplotlib  # lazy: see the module docstring
@@ -212,39 +225,49 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     noise = p["noise_kind"]
     imaging = f", {imaging_mode(p['imaging']).title(p)}" if "imaging" in p else ""
     w_m = grid["nx"] * grid.get("dx_m", grid["cell_m"])
-    h_m = grid["nz"] * grid["cell_m"]
-    extent = (0, w_m / 1000, h_m / 1000, 0)
+    if "twt" in root:            # a time section: rows are two-way-time samples
+        twt = np.asarray(root["twt"][:], dtype=np.float64)
+        dt = float(twt[1] - twt[0]) if twt.size > 1 else 1.0
+        extent = (0, w_m / 1000, float(twt[-1]) + dt, float(twt[0]))
+        aspect, y_label = "auto", "two-way time (s)"
+        height_ratio = sec.shape[0] / sec.shape[1]
+    else:
+        h_m = grid["nz"] * grid["cell_m"]
+        extent = (0, w_m / 1000, h_m / 1000, 0)
+        aspect, y_label = "equal", "depth (km)"
+        height_ratio = h_m / w_m
     clip = float(np.percentile(np.abs(sec), 99)) or 1.0
     from matplotlib.colors import ListedColormap  # lazy: see the module docstring
 
-    fig, axes = plt.subplots(1, 3, figsize=(16, 1.3 + 16 / 3 * h_m / w_m), sharey=True, layout="constrained")
-    axes[0].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect="equal")
-    axes[0].set_title(f"seismic: {float(p['freq_hz']):g} Hz, SNR {float(p['snr_db']):g} dB "
+    fig, axes = plt.subplots(1, 3, figsize=(16, 1.3 + 16 / 3 * height_ratio), sharey=True,
+                             layout="constrained")
+    axes[0].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect=aspect)
+    axes[0].set_title(f"seismic: {float(p['freq_hz']):.3g} Hz, SNR {float(p['snr_db']):.3g} dB "
                       f"({noise}){imaging}")
-    axes[1].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect="equal")
+    axes[1].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect=aspect)
     if "fault_id" in root:  # slip-trace labels: one colour per fault instance
         fid = np.asarray(root["fault_id"][index]).astype(float)
         fid[fault == 0] = 0
         axes[1].imshow(np.ma.masked_equal(fid, 0), cmap="tab10", vmin=0.5, vmax=10.5,
-                       extent=extent, aspect="equal", interpolation="nearest")
+                       extent=extent, aspect=aspect, interpolation="nearest")
         n_f = int(np.unique(fid[fid > 0]).size)
         slip = np.asarray(root["slip_m"][index])
         axes[1].set_title(f"fault label over the section: {n_f} faults (colour = id), "
                           f"max slip {float(slip.max()):.0f} m")
     else:
         axes[1].imshow(np.ma.masked_equal(fault, 0), cmap=ListedColormap(["red"]),
-                       extent=extent, aspect="equal", interpolation="nearest")
+                       extent=extent, aspect=aspect, interpolation="nearest")
         axes[1].set_title("fault label (red) over the section")
     damage_spec = sample_array("damage")
     axes[2].imshow(damage, cmap="magma", vmin=damage_spec.valid_range[0],
-                   vmax=damage_spec.valid_range[1], extent=extent, aspect="equal",
+                   vmax=damage_spec.valid_range[1], extent=extent, aspect=aspect,
                    interpolation="nearest")
     axes[2].set_title(damage_spec.description)
     for ax in axes:
         ax.set_xlabel("x (km)")
-    axes[0].set_ylabel("depth (km)")
+    axes[0].set_ylabel(y_label)
     fig.suptitle(f"sample {index}: run {int(p['run_id'])}, snapshot {int(p['snapshot'])}, "
-                 f"dip {float(p['dip_deg']):.0f}°, throw so far {float(p['throw_m']):.0f} m")
+                 f"{_deformation(p)}")
     out = Path(out)
     # the name is kept as given: no suffix means PNG (matplotlib would append ".png")
     fmt = out.suffix[1:].lower() or "png"

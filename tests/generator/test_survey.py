@@ -152,5 +152,13 @@ def test_rock_time_window_is_the_height_at_the_fastest_vp_and_every_column_fills
         s = store.sample(i)
         assert s["seismic"].shape[0] == t_rock.size
         assert (s["layer"] >= 0).all()                 # rock down to the last sample
+    from demseis.plotting import _deformation, plot_sample
+
+    assert plot_sample(tmp_path / "r.zarr", 1, tmp_path / "s.png").stat().st_size > 10_000
+    assert _deformation({"n_basement_faults": 0, "base_stretch": 0.029}) == \
+        "base stretched by 2.9 %"
+    assert _deformation({"n_basement_faults": 1, "dip_deg": 60.0, "throw_m": 50.0,
+                         "base_stretch": -0.1}) == \
+        "dip 60°, throw so far 50 m, base shortened by 10.0 %"
     with pytest.raises(ConfigError, match="time_window"):
         _cfg(domain="time", time_window="survey")
