@@ -23,32 +23,17 @@ CASES = {"time_small_throws": ("time", (3.0, 30.0), 1.0),
          "depth": ("depth", (5.0, 60.0), 1.0)}
 
 
-def config(domain: str, throw: tuple[float, float], taper: float, n_runs: int):
-    from demseis.generator.config import load_config, parse_config
-
-    raw = load_config(preset="tiny").to_dict()
-    raw["sweep"].update(seed=3, n_runs=n_runs, dip_deg={"dist": "uniform", "low": 35, "high": 80},
-                        throw_m={"dist": "uniform", "low": throw[0], "high": throw[1]},
-                        fault_kind={"dist": "choice", "values": ["normal", "reverse"]},
-                        fault_x_frac={"dist": "uniform", "low": 0.3, "high": 0.7},
-                        dip_direction={"dist": "choice", "values": ["right", "left"]},
-                        throw_taper=taper, snr_db="inf", freq_hz=30)
-    raw["model"].update(engine="kinematic", width_m=2000.0, height_m=800.0, n_snapshots=3)
-    raw["grid"]["cell_m"] = 5.0 if domain == "time" else 10.0
-    raw["output"] = {"domain": domain, "dt_s": 0.004, "trace_spacing_m": 25.0}
-    return parse_config(raw)
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--runs", type=int, default=8)
     ap.add_argument("--store", help="a store whose labels' loops and rungs are counted")
     args = ap.parse_args(argv)
-    from demseis.diagnostics.picks import kinematic_agreement, shape_counts
+    from demseis.diagnostics.picks import kinematic_agreement, planar_fault_sweep, shape_counts
 
     for name, (domain, throw, taper) in CASES.items():
         t0 = time.perf_counter()
-        rows = kinematic_agreement(config(domain, throw, taper, args.runs), list(range(args.runs)))
+        rows = kinematic_agreement(planar_fault_sweep(domain, throw, taper, args.runs),
+                                   list(range(args.runs)))
         lab = sum(r["label_px"] for r in rows)
         vis = sum(r["visible_px"] for r in rows)
         print(json.dumps({

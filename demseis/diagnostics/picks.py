@@ -27,6 +27,27 @@ from demseis.generator.survey import labels_at_traces, trace_spacing, trace_x
 from demseis.labels import loop_count, rung_fraction
 
 
+def planar_fault_sweep(domain: str, throw_m: tuple[float, float], taper: float,
+                       n_runs: int) -> Config:
+    """A kinematic sweep of ``n_runs`` runs with one planar fault each (dips 35-80 degrees,
+    normal or reverse, either direction, throws uniform in ``throw_m`` tapering by ``taper``)
+    in a 2000 x 800 m box with 25 m traces: 4 ms two-way time on 5 m cells (``domain =
+    "time"``) or 10 m depth cells (``"depth"``); noise-free, 30 Hz."""
+    from demseis.generator.config import load_config, parse_config
+
+    raw = load_config(preset="tiny").to_dict()
+    raw["sweep"].update(seed=3, n_runs=n_runs, dip_deg={"dist": "uniform", "low": 35, "high": 80},
+                        throw_m={"dist": "uniform", "low": throw_m[0], "high": throw_m[1]},
+                        fault_kind={"dist": "choice", "values": ["normal", "reverse"]},
+                        fault_x_frac={"dist": "uniform", "low": 0.3, "high": 0.7},
+                        dip_direction={"dist": "choice", "values": ["right", "left"]},
+                        throw_taper=taper, snr_db="inf", freq_hz=30)
+    raw["model"].update(engine="kinematic", width_m=2000.0, height_m=800.0, n_snapshots=3)
+    raw["grid"]["cell_m"] = 5.0 if domain == "time" else 10.0
+    raw["output"] = {"domain": domain, "dt_s": 0.004, "trace_spacing_m": 25.0}
+    return parse_config(raw)
+
+
 def true_trace(cfg: Config, fault: Any, fraction: float, vp_cell: np.ndarray,
                ) -> tuple[np.ndarray, np.ndarray]:
     """The true trace of a planar kinematic fault on the output grid, and its throw there in

@@ -8,27 +8,13 @@ import numpy as np
 import pytest
 
 import demseis
-from demseis.diagnostics.picks import kinematic_agreement, shape_counts, true_trace
-from demseis.generator.config import load_config, parse_config
+from demseis.diagnostics.picks import (kinematic_agreement, planar_fault_sweep, shape_counts,
+                                       true_trace)
 from demseis.generator.engines import get_engine
 from demseis.generator.engines.kinematic import kinematic_faults
 from demseis.generator.layout import grid_of
 from demseis.generator.sampling import SEED_DEM, plan_run, rng_at
 from demseis.generator.survey import trace_spacing
-
-
-def _kinematic(domain: str, throw: tuple[float, float], taper: float) -> dict:
-    raw = load_config(preset="tiny").to_dict()
-    raw["sweep"].update(seed=3, n_runs=6, dip_deg={"dist": "uniform", "low": 35, "high": 80},
-                        throw_m={"dist": "uniform", "low": throw[0], "high": throw[1]},
-                        fault_kind={"dist": "choice", "values": ["normal", "reverse"]},
-                        fault_x_frac={"dist": "uniform", "low": 0.3, "high": 0.7},
-                        dip_direction={"dist": "choice", "values": ["right", "left"]},
-                        throw_taper=taper, snr_db="inf", freq_hz=30)
-    raw["model"].update(engine="kinematic", width_m=2000.0, height_m=800.0, n_snapshots=3)
-    raw["grid"]["cell_m"] = 5.0 if domain == "time" else 10.0
-    raw["output"] = {"domain": domain, "dt_s": 0.004, "trace_spacing_m": 25.0}
-    return raw
 
 
 def _pooled(rows, key, weight):
@@ -39,7 +25,7 @@ def _pooled(rows, key, weight):
                                                 ("time", (20.0, 200.0), 0.5),
                                                 ("depth", (5.0, 60.0), 1.0)])
 def test_picks_lie_on_the_true_trace_and_find_it_where_the_throw_shows(domain, throw, taper):
-    cfg = parse_config(_kinematic(domain, throw, taper))
+    cfg = planar_fault_sweep(domain, throw, taper, 6)
     rows = kinematic_agreement(cfg, list(range(6)))
     assert sum(r["label_px"] for r in rows) > 200
     assert _pooled(rows, "on_trace", "label_px") >= 0.95
@@ -47,7 +33,7 @@ def test_picks_lie_on_the_true_trace_and_find_it_where_the_throw_shows(domain, t
 
 
 def test_the_check_fails_for_a_trace_three_traces_off():
-    cfg = parse_config(_kinematic("time", (20.0, 200.0), 0.5))
+    cfg = planar_fault_sweep("time", (20.0, 200.0), 0.5, 6)
     engine = get_engine("kinematic")
     spec = plan_run(cfg, 0)
     er = engine.simulate(cfg, spec)

@@ -118,6 +118,22 @@ def test_throw_samples_in_depth_and_time():
         throw_samples(slip, dip)
 
 
+def _thin_reference(rows, cols):
+    """thin_path written plainly: a list as the stack of kept indices."""
+    kept = []
+    for i, (r, c) in enumerate(zip(rows.tolist(), cols.tolist())):
+        if kept and (rows[kept[-1]], cols[kept[-1]]) == (r, c):
+            continue
+        while len(kept) >= 2 and max(abs(r - rows[kept[-2]]), abs(c - cols[kept[-2]])) <= 1:
+            kept.pop()
+        if kept and (rows[kept[-1]], cols[kept[-1]]) == (r, c):
+            continue
+        kept.append(i)
+    out = np.zeros(len(rows), bool)
+    out[kept] = True
+    return out
+
+
 def test_thin_path_leaves_a_one_pixel_path_from_start_to_end():
     rng = np.random.default_rng(3)
     for _ in range(300):
@@ -126,6 +142,7 @@ def test_thin_path_leaves_a_one_pixel_path_from_start_to_end():
         pos = np.cumsum(steps, axis=0)
         rows, cols = pos[:, 0].astype(np.int64), pos[:, 1].astype(np.int64)
         keep = thin_path(rows, cols)
+        np.testing.assert_array_equal(keep, _thin_reference(rows, cols))
         r, c = rows[keep], cols[keep]
         assert keep[0] and (r[-1], c[-1]) == (rows[-1], cols[-1])
         assert (np.abs(np.diff(r)) <= 1).all() and (np.abs(np.diff(c)) <= 1).all()
