@@ -16,7 +16,7 @@ import numpy as np
 from scipy import ndimage
 
 from demseis.errors import InputError
-from demseis.generator.config import Config
+from demseis.generator.config import Config, load_config, parse_config
 from demseis.generator.engines import get_engine
 from demseis.generator.engines.kinematic import kinematic_faults
 from demseis.generator.layout import grid_of, time_axis_of
@@ -33,8 +33,6 @@ def planar_fault_sweep(domain: str, throw_m: tuple[float, float], taper: float,
     normal or reverse, either direction, throws uniform in ``throw_m`` tapering by ``taper``)
     in a 2000 x 800 m box with 25 m traces: 4 ms two-way time on 5 m cells (``domain =
     "time"``) or 10 m depth cells (``"depth"``); noise-free, 30 Hz."""
-    from demseis.generator.config import load_config, parse_config
-
     raw = load_config(preset="tiny").to_dict()
     raw["sweep"].update(seed=3, n_runs=n_runs, dip_deg={"dist": "uniform", "low": 35, "high": 80},
                         throw_m={"dist": "uniform", "low": throw_m[0], "high": throw_m[1]},
