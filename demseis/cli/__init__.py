@@ -80,6 +80,13 @@ def _path_arg(args: argparse.Namespace | None) -> str:
     return "(path unknown)"
 
 
+def _quiet_pending_tasks() -> None:
+    """Silence what asyncio says at exit of tasks left on zarr's event loop ("Task was
+    destroyed but it is pending!", "coroutine ... was never awaited")."""
+    logging.getLogger("asyncio").setLevel(logging.CRITICAL)
+    warnings.filterwarnings("ignore", message="coroutine .* was never awaited")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the process exit code."""
     try:
@@ -90,6 +97,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 2
         return int(args.func(args) or 0)
     except DemseisError as exc:
+        # a store read that failed (a damaged chunk) leaves its sibling reads pending on
+        # zarr's event loop: their "Task was destroyed" at exit is noise after the one line
+        _quiet_pending_tasks()
         print(f"demseis: error: {exc}", file=sys.stderr)
         return exc.exit_code
     except OSError as exc:  # read-only or full filesystem, a path under /proc, permissions
@@ -97,11 +107,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"demseis: error: {where}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        # an interrupted zarr call leaves a task on zarr's event loop; asyncio would log
-        # "Task was destroyed but it is pending!" (or "never awaited") at exit. What was written is consistent
-        # (a shard counts only once its done flag is set), so that message is noise.
-        logging.getLogger("asyncio").setLevel(logging.CRITICAL)
-        warnings.filterwarnings("ignore", message="coroutine .* was never awaited")
+        # an interrupted zarr call leaves a task on zarr's event loop. What was written is
+        # consistent (a shard counts only once its done flag is set), so that is noise.
+        _quiet_pending_tasks()
         command = getattr(locals().get("args"), "command", None)
         if command in WRITING_COMMANDS:
             print("demseis: interrupted; run the same command to resume", file=sys.stderr)
