@@ -161,20 +161,27 @@ def test_shortening_pushes_the_right_wall_in():
     assert p["n_faults"].max() >= 1
 
 
-def test_stretch_combines_with_a_basement_fault(monkeypatch):
-    """A normal fault and a stretching base: at the last snapshot the right wall has moved by
-    the fault's heave plus the stretch (and dropped by the throw), the left wall not at all; the
-    throw is reached in proportion (half at snapshot 1 of 3)."""
+@pytest.fixture
+def engines(monkeypatch) -> list:
+    """Every DEM Engine that ``simulate`` builds during the test, in order (their walls are
+    what the basement was at the end of the run)."""
     import demseis.dem.fault as fault_module
 
-    engines = []
+    made = []
 
     class Recording(fault_module.Engine):
         def __init__(self, *args, **kwargs):
             super().__init__(*args, **kwargs)
-            engines.append(self)
+            made.append(self)
 
     monkeypatch.setattr(fault_module, "Engine", Recording)
+    return made
+
+
+def test_stretch_combines_with_a_basement_fault(engines):
+    """A normal fault and a stretching base: at the last snapshot the right wall has moved by
+    the fault's heave plus the stretch (and dropped by the throw), the left wall not at all; the
+    throw is reached in proportion (half at snapshot 1 of 3)."""
     asm = build_assembly(1000.0, 400.0, radius_min_m=12.5, radius_max_m=25.0, n_layers=4, rng=1)
     f = BasementFault(500.0, 60.0, 60.0)
     snaps = simulate(asm, FaultSystem((f,)), Material(), n_snapshots=3, rng=2, base_stretch=0.1)
@@ -190,20 +197,11 @@ def test_stretch_combines_with_a_basement_fault(monkeypatch):
 
 
 @pytest.mark.parametrize("stretch", [0.2, -0.2])
-def test_no_gap_opens_in_a_run(monkeypatch, stretch):
+def test_no_gap_opens_in_a_run(engines, stretch):
     """After a whole run with a rotating (listric) hanging wall and a stretching base, the
     block-top pieces the engine holds still meet end to end (within 1% of r_min)."""
-    import demseis.dem.fault as fault_module
     from demseis.dem.basement import half_graben
 
-    engines = []
-
-    class Recording(fault_module.Engine):
-        def __init__(self, *args, **kwargs):
-            super().__init__(*args, **kwargs)
-            engines.append(self)
-
-    monkeypatch.setattr(fault_module, "Engine", Recording)
     asm = build_assembly(1000.0, 400.0, radius_min_m=12.5, radius_max_m=25.0, n_layers=4, rng=1)
     system = half_graben(600.0, 55.0, 60.0, "right", 3000.0)
     simulate(asm, system, Material(), n_snapshots=2, rng=2, base_stretch=stretch)

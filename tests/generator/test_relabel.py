@@ -23,6 +23,24 @@ def _relabel_strain_band(src, tmp_path):
     return a, b
 
 
+def _store_of_a_previous_version(tmp_path, toml: str, section: str, key: str):
+    """A ``tiny`` store generated with ``toml`` whose stored config then loses
+    ``[section] key``, as a store written before that key existed has it; returns its path and
+    that config."""
+    import zarr
+
+    cfg = tmp_path / "cfg.toml"
+    cfg.write_text(toml)
+    src = tmp_path / "t.zarr"
+    assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(src), "--workers", "0",
+                 "--quiet"]) == 0
+    root = zarr.open_group(str(src), mode="r+")
+    old = dict(root.attrs["config"])
+    old[section] = {k: v for k, v in old[section].items() if k != key}
+    root.attrs["config"] = old
+    return src, old
+
+
 def test_relabel_keeps_seismic_bytes_and_changes_labels(tmp_path):
     src, dst = tmp_path / "t.zarr", tmp_path / "l.zarr"
     assert main(["generate", "--preset", "tiny", "--out", str(src), "--workers", "0",
@@ -44,19 +62,10 @@ def test_relabel_rejects_a_bad_labels_file(tmp_path, capsys):
 def test_relabel_of_a_store_from_before_the_strata_rendering_keeps_its_seismic(tmp_path):
     """A store whose config has no [output] rendering was rendered from elements; relabelling
     it must not switch to the strata default."""
-    import zarr
-
     from demseis.generator.config import load_config, stored_config
 
-    cfg = tmp_path / "e.toml"
-    cfg.write_text('[output]\nrendering = "elements"\n')
-    src = tmp_path / "t.zarr"
-    assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(src), "--workers", "0",
-                 "--quiet"]) == 0
-    root = zarr.open_group(str(src), mode="r+")
-    old = dict(root.attrs["config"])
-    old["output"] = {k: v for k, v in old["output"].items() if k != "rendering"}
-    root.attrs["config"] = old                     # as a store of the previous version has it
+    src, old = _store_of_a_previous_version(tmp_path, '[output]\nrendering = "elements"\n',
+                                            "output", "rendering")
     assert stored_config(old).output.rendering == "elements"
     assert load_config(preset="tiny").output.rendering == "strata"   # the new default
     _relabel_strain_band(src, tmp_path)
@@ -70,15 +79,9 @@ def test_a_store_from_before_the_picks_keeps_its_traces_and_relabel_picks_them(t
     from demseis.generator.config import stored_config
     from demseis.generator.rerender import rerender
 
-    cfg = tmp_path / "t.toml"
-    cfg.write_text('[labels]\nfault_style = "traces"\nthickness_cells = 3.0\n')
-    src = tmp_path / "t.zarr"
-    assert main(["generate", str(cfg), "--preset", "tiny", "--out", str(src), "--workers", "0",
-                 "--quiet"]) == 0
-    root = zarr.open_group(str(src), mode="r+")
-    old = dict(root.attrs["config"])
-    old["labels"] = {k: v for k, v in old["labels"].items() if k != "fault_style"}
-    root.attrs["config"] = old                     # as a store of the previous version has it
+    src, old = _store_of_a_previous_version(
+        tmp_path, '[labels]\nfault_style = "traces"\nthickness_cells = 3.0\n', "labels",
+        "fault_style")
     assert stored_config(old).labels.fault_style == "traces"
     again = tmp_path / "again.zarr"
     rerender(src, again, freqs_hz=[30.0], snrs_db=[float("inf")], progress=False)
