@@ -221,14 +221,14 @@ def pick_faults(maps: Mapping[str, np.ndarray], throw_px: np.ndarray,
 
     Returns
     -------
-    A new dict: the same keys and dtypes, the :data:`PICKED` maps replaced.
+    A new dict: the same keys and dtypes, the :data:`PICKED` maps new arrays, the others the
+    arrays of ``maps`` themselves.
     """
     fid = np.asarray(maps["fault_id"])
     fault = np.asarray(maps["fault"]) > 0
     shape = fid.shape
-    out = {name: np.array(m, copy=True) for name, m in maps.items()}
-    for name in PICKED:
-        out[name] = np.zeros(shape, dtype=np.asarray(maps[name]).dtype)
+    out = {name: (np.zeros(shape, dtype=np.asarray(m).dtype) if name in PICKED else m)
+           for name, m in maps.items()}
     slip = np.asarray(maps["slip_m"], dtype=np.float64)
     dip = np.asarray(maps["dip_deg"], dtype=np.float64)
     sense = np.asarray(maps["sense"], dtype=np.float64)
