@@ -13,6 +13,7 @@ generator and the scoring code (``demseis.open`` needs neither)::
     ds = store.torch_dataset(crop=128, split="train")   # a torch Dataset (FaultSegDataset)
     xr = store.to_xarray()                              # an xarray.Dataset (needs xarray)
     result = demseis.score(pred, store, by=("freq_hz",))
+    result = demseis.score(pred, "picks.png", tolerance_px=2)  # against a hand-picked mask
     metrics = demseis.train(store, out="model.pt", steps=300)   # needs demseis[torch]
     demseis.predict("model.pt", "line.sgy", out="faults.sgy")   # SEG-Y in, probability out
 """
@@ -243,24 +244,47 @@ def open(path: str | Path) -> Store:  # noqa: A001 - demseis.open, like xarray.o
     return Store(path)
 
 
-def score(pred: Any, store: Store | str | Path, **kwargs: Any) -> Any:
-    """Score fault predictions against a store's labels (:func:`demseis.evaluation.scoring.score_store`).
+def score(pred: Any, store: Any, **kwargs: Any) -> Any:
+    """Score fault predictions against a store's labels
+    (:func:`demseis.evaluation.scoring.score_store`), or against a hand-picked mask
+    (:func:`demseis.evaluation.scoring.score_mask`).
 
     Parameters
     ----------
-    pred : (N_pred, H, W) array of probabilities in [0, 1], or a ``.npy`` / Zarr path.
-    store : a :class:`Store` or its path.
+    pred : (N_pred, H, W) array of probabilities in [0, 1], or a ``.npy`` / Zarr / SEG-Y path
+        ((H, W) too against a mask).
+    store : a :class:`Store` or its path; or a mask: a ``.npy``, ``.png``, ``.sgy`` or
+        ``.segy`` file (:func:`demseis.evaluation.fieldio.read_masks` says which pixels are
+        faults) or an array (H, W) / (N, H, W), nonzero on a fault.
     **kwargs : ``indices``, ``threshold``, ``tolerance_px``, ``by``, ``bins``, ``thresholds``,
-        ``progress``.
+        ``progress``; against a mask ``threshold``, ``tolerance_px``, ``thresholds``,
+        ``progress`` and ``resize`` (resample the predictions onto the mask's grid).
 
     Returns
     -------
     demseis.evaluation.scoring.StoreScore
         ``.overall`` (precision, recall, F1, IoU, ODS/OIS/AP), ``.rows`` per group,
-        ``.table()``, ``.write(prefix)``.
+        ``.table()``, ``.write(prefix)``. The same protocol and fields for a mask, with the
+        overall group only.
     """
-    from demseis.evaluation.scoring import score_store  # lazy: SciPy, which open() never needs
+    # lazy: SciPy, which open() never needs
+    from demseis.evaluation.fieldio import is_mask_file
+    from demseis.evaluation.scoring import score_mask, score_store
 
+    is_path = isinstance(store, (str, Path))
+    if is_path and os.path.isfile(store) and not is_mask_file(store):
+        raise InputError(f"{str(store)!r} is a file but neither a store (a directory) nor a "
+                         "mask (.npy, .png, .sgy or .segy)")
+    if (is_path and is_mask_file(store)) or (not is_path and not isinstance(store, Store)
+                                             and hasattr(store, "shape")):
+        for name in ("by", "indices"):
+            if kwargs.pop(name, None):
+                raise InputError(f"{name}: a mask has no store samples or parameters; "
+                                 f"{name} goes with a store")
+        kwargs.pop("bins", None)
+        return score_mask(pred, store, **kwargs)
+    if kwargs.pop("resize", False):
+        raise InputError("resize: predictions are resampled onto a mask's grid, not a store's")
     return score_store(pred, store, **kwargs)
 
 

@@ -22,15 +22,20 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     """Add ``score`` and ``baseline``."""
     p = sub.add_parser(
         "score",
-        help="precision / recall / F1 / IoU of fault predictions against a store's labels",
+        help="precision / recall / F1 / IoU of fault predictions against a store's labels or "
+        "a picked mask",
         description="Score fault predictions (a .npy file or Zarr array of shape (N, H, W), or "
-        "a SEG-Y section from 'demseis predict', probabilities in [0, 1]) against the 'fault' labels of a demseis store. Prints a "
-        "table and writes <prefix>.csv and <prefix>.json (and <prefix>.samples.csv with "
-        "--per-sample).",
+        "a SEG-Y section from 'demseis predict', probabilities in [0, 1]) against the 'fault' "
+        "labels of a demseis store (a directory), or against a hand-picked fault mask (a "
+        ".npy, .png, .sgy or .segy file: nonzero on a fault; in a PNG every pixel that differs "
+        "from the most common value, see docs/scoring.md). Prints a table and writes "
+        "<prefix>.csv and <prefix>.json (and <prefix>.samples.csv with --per-sample).",
     )
     p.add_argument("predictions", help="predictions: .npy file or Zarr array of shape (N, H, W), "
-                   "or a .sgy/.segy section (N = 1)")
-    p.add_argument("truth_store", metavar="STORE", help="demseis Zarr store with 'fault' labels")
+                   "a .npy (H, W), or a .sgy/.segy section (N = 1)")
+    p.add_argument("truth", metavar="STORE|MASK",
+                   help="demseis Zarr store with 'fault' labels, or a mask file (.npy, .png, "
+                   ".sgy, .segy) of the predictions' shape")
     p.add_argument("--tolerance", type=float, default=0.0, metavar="PX",
                    help="matching distance in pixels (default 0: exact overlap)")
     p.add_argument("--threshold", type=float, default=0.5,
@@ -50,6 +55,10 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
                    "extension, plus '.score')")
     p.add_argument("--per-sample", action="store_true",
                    help="also write one row per sample (<prefix>.samples.csv and in the JSON)")
+    p.add_argument("--resize", action="store_true",
+                   help="mask only: resample the predictions onto the mask's grid (bilinear, "
+                   "pixel centres aligned) when their shapes differ; --tolerance is then in "
+                   "mask pixels")
     p.set_defaults(func=_score_command)
 
     b = sub.add_parser(
@@ -125,20 +134,32 @@ def _load_indices(path: str) -> np.ndarray:
 
 def _score_command(args: argparse.Namespace) -> int:
     from demseis.api import score
+    from demseis.evaluation.fieldio import is_mask_file
 
     by = tuple(s.strip() for s in args.by.split(",") if s.strip())
+    mask = is_mask_file(args.truth)
+    if mask and (by or args.indices):
+        raise InputError(f"{'--by' if by else '--indices'} goes with a store; a mask has no "
+                         "store samples or parameters")
+    if args.resize and not mask:
+        raise InputError("--resize goes with a mask file; predictions scored against a store "
+                         "must have its sections' shape")
     indices = _load_indices(args.indices) if args.indices else None
-    result = score(args.predictions, args.truth_store, indices=indices, threshold=args.threshold,
-                   tolerance_px=args.tolerance, by=by, bins=args.bins,
-                   thresholds=args.thresholds, progress=sys.stderr.isatty())
-    print(f"predictions {args.predictions}  store {args.truth_store}  samples "
+    kw = {"resize": args.resize} if mask else {"indices": indices, "by": by}
+    result = score(args.predictions, args.truth, threshold=args.threshold,
+                   tolerance_px=args.tolerance, bins=args.bins, thresholds=args.thresholds,
+                   progress=sys.stderr.isatty(), **kw)
+    what = "mask" if mask else "store"
+    print(f"predictions {args.predictions}  {what} {args.truth}  samples "
           f"{result.counts.n_samples}  threshold {args.threshold:g}  tolerance "
           f"{args.tolerance:g} px")
     print(result.table())
     print(result.summary_line())
     prefix = args.out_prefix or _default_prefix(args.predictions)
     written = result.write(prefix, per_sample=args.per_sample,
-                           meta={"predictions": args.predictions, "store": args.truth_store,
+                           meta={"predictions": args.predictions,
+                                 "store": None if mask else args.truth,
+                                 **({"mask": args.truth} if mask else {}),
                                  "by": list(by), "bins": args.bins})
     print("wrote " + ", ".join(written))
     return 0

@@ -61,6 +61,7 @@ from tqdm import tqdm
 
 from demseis.datasets.read import open_truth
 from demseis.errors import InputError, StoreError
+from demseis.evaluation.fieldio import as_masks, read_masks, resize_sections
 from demseis.evaluation.segyfile import is_segy, read_segy_section
 
 if TYPE_CHECKING:
@@ -75,6 +76,7 @@ __all__ = [
     "within_tolerance",
     "metrics_from_counts",
     "score",
+    "score_mask",
     "score_store",
     "StoreScore",
     "summarise",
@@ -485,9 +487,9 @@ MAX_CATEGORIES = 12
 
 
 def load_predictions(path: str) -> Any:
-    """Open predictions of shape (N, H, W): a ``.npy`` file (memory-mapped), a Zarr array, or a
-    SEG-Y file (``.sgy`` / ``.segy``, one section: N = 1, a trace per column, as ``demseis
-    predict`` writes it).
+    """Open predictions of shape (N, H, W): a ``.npy`` file (memory-mapped; a 2-D (H, W) one
+    is one section, N = 1), a Zarr array, or a SEG-Y file (``.sgy`` / ``.segy``, one section:
+    N = 1, a trace per column, as ``demseis predict`` writes it).
 
     A Zarr group is accepted when it holds one array, or an array named ``pred``.
     """
@@ -505,6 +507,8 @@ def load_predictions(path: str) -> Any:
                                  "numbers: save a numeric (N, H, W) array, e.g. "
                                  "np.save(path, pred.astype(np.float32))") from None
             raise InputError(f"predictions {path!r}: cannot read as .npy ({exc})") from exc
+        if arr.ndim == 2:
+            arr = arr[None]
     else:
         import zarr  # lazy: ~0.25 s to import, and only Zarr predictions need it
 
@@ -524,7 +528,8 @@ def load_predictions(path: str) -> Any:
                                  "give the array path itself or name it 'pred'")
         arr = node
     if len(arr.shape) != 3:
-        raise InputError(f"predictions {path!r}: expected shape (N, H, W), got {arr.shape}")
+        raise InputError(f"predictions {path!r}: expected shape (N, H, W) or (H, W), got "
+                         f"{arr.shape}")
     return arr
 
 
@@ -848,3 +853,61 @@ def score_store(pred: Any, store: Any, *, indices: ArrayLike | None = None,
     params = truth.params.take(sample)  # without building (N,) columns of a huge store
     return StoreScore(overall=summarise(counts), rows=group_rows(counts, params, list(by), bins=bins),
                       sample_index=sample, params=params, counts=counts)
+
+
+def score_mask(pred: Any, mask: Any, *, threshold: float = 0.5, tolerance_px: float = 0.0,
+               thresholds: int | ArrayLike = 99, resize: bool = False,
+               progress: bool = False) -> StoreScore:
+    """Score fault predictions against a hand-picked mask, as :func:`score_store` scores them
+    against a store (the same counts, sweep and report, without per-sample parameters).
+
+    Parameters
+    ----------
+    pred : array-like (H, W) or (N, H, W), or a path
+        Probabilities in [0, 1]: an array, or a ``.npy``, Zarr or SEG-Y file
+        (:func:`load_predictions`).
+    mask : array-like (H, W) or (N, H, W), or a path
+        The picked faults: nonzero on a fault. A path is read by
+        :func:`demseis.evaluation.fieldio.read_masks` (``.npy``, ``.png`` or SEG-Y; its rules
+        say which pixels of a PNG are faults).
+    threshold, tolerance_px, thresholds : see :func:`score`.
+    resize : resample the predictions onto the mask's grid
+        (:func:`demseis.evaluation.fieldio.resize_sections`, bilinear) when their (H, W)
+        differ; without it a different shape is an error naming both. The number of sections
+        N must match either way. ``tolerance_px`` is then in mask pixels.
+    progress : accepted for the same call as :func:`score_store`; a mask is scored at once.
+
+    Returns
+    -------
+    StoreScore
+        One row per section; ``rows`` holds only the overall group, ``params`` is empty.
+    """
+    del progress  # a few sections: no bar
+    if isinstance(mask, (str, bytes)) or hasattr(mask, "__fspath__"):
+        truth = read_masks(os.fsdecode(mask))
+    else:
+        truth = as_masks(mask)
+    if isinstance(pred, (str, bytes)) or hasattr(pred, "__fspath__"):
+        pred = load_predictions(os.fsdecode(pred))
+    p = np.asarray(pred)
+    if p.ndim == 2:
+        p = p[None]
+    if p.ndim != 3 or p.size == 0:
+        raise InputError(f"predictions: expected shape (H, W) or (N, H, W), got {p.shape}")
+    if p.shape[0] != truth.shape[0] or (p.shape[1:] != truth.shape[1:] and not resize):
+        hint = "" if p.shape[0] != truth.shape[0] else \
+            "; pass --resize (resize=True) to resample the predictions onto the mask's grid"
+        raise InputError(f"predictions have shape {_shape(p)} but the mask has shape "
+                         f"{_shape(truth)}{hint}")
+    if p.shape[1:] != truth.shape[1:]:
+        validate_pred(p, "predictions")  # before resampling: a logit is named as it is
+        p = resize_sections(p, truth.shape[1:])
+    counts = count_samples(p, truth, threshold, tolerance_px, thresholds=thresholds)
+    return StoreScore(overall=summarise(counts), rows=group_rows(counts, {}, []),
+                      sample_index=np.arange(counts.n_samples, dtype=np.int64), params={},
+                      counts=counts)
+
+
+def _shape(a: NDArray[Any]) -> tuple[int, ...]:
+    """(H, W) for one section, (N, H, W) for several: the shape as the user gave it."""
+    return tuple(int(s) for s in (a.shape[1:] if a.shape[0] == 1 else a.shape))
