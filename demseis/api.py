@@ -15,6 +15,7 @@ generator and the scoring code (``demseis.open`` needs neither)::
     result = demseis.score(pred, store, by=("freq_hz",))
     result = demseis.score(pred, "picks.png", tolerance_px=2)  # against a hand-picked mask
     metrics = demseis.train(store, out="model.pt", steps=300)   # needs demseis[torch]
+    metrics = demseis.train(["a.zarr", "b.zarr"], weights=[2, 1], out="ab.pt")  # a mix
     demseis.predict("model.pt", "line.sgy", out="faults.sgy")   # SEG-Y in, probability out
 """
 
@@ -288,23 +289,29 @@ def score(pred: Any, store: Any, **kwargs: Any) -> Any:
     return score_store(pred, store, **kwargs)
 
 
-def train(store: Store | str | Path, out: str | Path = "model.pt", **kwargs: Any) -> dict[str, Any]:
-    """Train the fault-segmentation U-Net on a store; write ``out``, ``out.json``, ``out.ckpt``.
+def train(store: Any, out: str | Path = "model.pt", **kwargs: Any) -> dict[str, Any]:
+    """Train the fault-segmentation U-Net on a store, or on several; write ``out``,
+    ``out.json``, ``out.ckpt``.
 
     Whole runs are held out: the model kept is the best on the validation runs, and the
     returned metrics (precision, recall, F1, IoU, AP at a 2-pixel tolerance) are those of the
-    test runs. Needs torch (``pip install "demseis[torch]"``) and a store of at least 3 runs.
+    test runs. Needs torch (``pip install "demseis[torch]"``) and stores of at least 3 runs.
 
     Parameters
     ----------
-    store : a :class:`Store` or its path.
+    store : a :class:`Store` or its path, or a list of them: each is split by its own runs,
+        the batches draw from their train runs in proportion to ``weights``, and the metrics
+        cover every store's test runs (pooled, and per store in ``metrics["per_store"]``).
     out : the model file.
-    **kwargs : ``steps`` (300), ``crop``, ``batch``, ``base``, ``lr``, ``seed``, ``device``,
-        ``val_every``, ``save_every``, ``resume``, ``threads``, ``progress``, ``log``
+    **kwargs : ``weights`` (one positive number per store; default equal), ``steps`` (300),
+        ``crop``, ``batch``, ``base``, ``lr``, ``seed``, ``device``, ``val_every``,
+        ``save_every``, ``resume``, ``threads``, ``progress``, ``log``
         (:func:`demseis.evaluation.model.train_model`).
     """
     from demseis.evaluation.model import train_model  # lazy: torch
 
+    if isinstance(store, (list, tuple)):
+        return train_model([str(getattr(s, "path", s)) for s in store], out, **kwargs)
     return train_model(str(getattr(store, "path", store)), out, **kwargs)
 
 

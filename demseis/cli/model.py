@@ -8,18 +8,26 @@ import argparse
 import sys
 
 from demseis.cli._args import nonneg_int, pos_int
+from demseis.errors import InputError
 
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``train`` and ``predict``."""
     t = sub.add_parser(
-        "train", help="train a fault-segmentation U-Net on a store (needs demseis[torch])",
+        "train", help="train a fault-segmentation U-Net on one or more stores (needs "
+        "demseis[torch])",
         description="Train the project's U-Net on a store's training runs (CPU or CUDA), keep "
         "the best model on its validation runs, and print and save precision, recall, F1 and "
-        "AP on its test runs (whole runs are held out, so the store needs at least 3). Writes "
-        "OUT, OUT with suffix .json (metrics and settings) and OUT.ckpt (training state for "
-        "--resume).")
-    t.add_argument("store", metavar="STORE", help="demseis store with seismic and fault arrays")
+        "AP on its test runs (whole runs are held out, so the store needs at least 3). With "
+        "several stores each is split by its own runs, the batches draw from their training "
+        "runs in proportion to --weights, and validation and the test metrics cover every "
+        "store (per store and overall). Writes OUT, OUT with suffix .json (metrics and "
+        "settings) and OUT.ckpt (training state for --resume).")
+    t.add_argument("store", metavar="STORE", nargs="+",
+                   help="demseis store(s) with seismic and fault arrays")
+    t.add_argument("--weights", default=None, metavar="W1,W2,...",
+                   help="one positive weight per store, comma-separated: the share of the "
+                   "training samples drawn from each (default: equal)")
     t.add_argument("--out", default="model.pt", help="model file (default model.pt)")
     t.add_argument("--steps", type=pos_int, default=300,
                    help="optimiser steps in all, counting those before a --resume (default 300)")
@@ -56,11 +64,22 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.set_defaults(func=_predict_command)
 
 
+def _weights(text: str | None) -> list[float] | None:
+    """``--weights 2,1`` as numbers; their count and sign are checked with the stores."""
+    if text is None:
+        return None
+    try:
+        return [float(w) for w in text.split(",")]
+    except ValueError:
+        raise InputError(f"--weights {text!r}: give one number per store, comma-separated, "
+                         "e.g. 2,1") from None
+
+
 def _train_command(args: argparse.Namespace) -> int:
     from demseis.api import train
 
     quiet = args.quiet
-    train(args.store, args.out, steps=args.steps, crop=args.crop, batch=args.batch,
+    train(args.store, args.out, weights=_weights(args.weights), steps=args.steps, crop=args.crop, batch=args.batch,
           base=args.base, lr=args.lr, seed=args.seed, device=args.device,
           val_every=args.val_every, save_every=args.save_every, resume=args.resume,
           threads=args.threads, progress=not quiet and sys.stderr.isatty(),

@@ -5,13 +5,17 @@ and from the file to the fault probability of any section (a store's, or your SE
 
     from demseis.evaluation.model import train_model, predict_file
     metrics = train_model("quick.zarr", "model.pt", steps=300)  # held-out precision, recall, F1, AP
+    metrics = train_model(["a.zarr", "b.zarr"], "ab.pt", weights=[2, 1])   # a mix of two stores
     predict_file("model.pt", "line.sgy", "faults.sgy")          # probability with line.sgy's headers
 
 Training is :func:`demseis.evaluation.train.train_unet` on the store's ``train`` runs; the model
 kept is the best on the ``val`` runs, and the metrics are those of the ``test`` runs (never seen
 in training or selection), scored by :func:`demseis.evaluation.scoring.score_store` at a
 tolerance of :data:`TOLERANCE_PX` pixels. The three splits are whole runs
-(:func:`demseis.datasets.split_of_shards`), so a store needs at least three runs.
+(:func:`demseis.datasets.split_of_shards`), so a store needs at least three runs. Several
+stores train one model: each is split by its own runs, batches draw from their train runs in
+proportion to ``weights``, and validation and the test metrics cover every store (pooled, and
+per store in ``per_store``).
 
 Files: ``OUT`` (``torch.save`` of a dict: the weights, the U-Net width, what it was trained on
 and its metrics), ``OUT`` with the suffix ``.json`` (the metrics and settings), and ``OUT.ckpt``
@@ -23,7 +27,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -31,9 +35,9 @@ import numpy as np
 
 from demseis.datasets import FaultSegDataset, open_store, store_layout
 from demseis.errors import InputError, import_torch
-from demseis.evaluation.scoring import score_store
+from demseis.evaluation.scoring import SampleCounts, score_store, summarise
 from demseis.evaluation.segyfile import is_segy, read_segy_section, write_segy_like
-from demseis.evaluation.train import build_unet, predict_sections, train_unet
+from demseis.evaluation.train import build_unet, check_weights, predict_sections, train_unet
 
 #: the model file's format tag and version
 FORMAT = "demseis-unet"
@@ -89,36 +93,46 @@ def check_trainable(store: str | Path, crop: int | None) -> int:
     return int(crop)
 
 
-def train_model(store: str | Path, out: str | Path, *, steps: int = 300,
+def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, steps: int = 300,
                 crop: int | None = None, batch: int = 8, base: int = 16, lr: float = 2e-3,
                 seed: int = 0, device: str | None = None, val_every: int | None = None,
                 save_every: int = 50, resume: bool = False, threads: int | None = None,
-                progress: bool = True,
-                log: Callable[[str], None] | None = print) -> dict[str, Any]:
-    """Train the U-Net on ``store`` and write it to ``out``; return the held-out metrics.
+                progress: bool = True, log: Callable[[str], None] | None = print,
+                weights: Sequence[float] | None = None) -> dict[str, Any]:
+    """Train the U-Net on ``store`` (or several stores) and write it to ``out``; return the
+    held-out metrics.
 
     Parameters
     ----------
-    store : a demseis store with ``seismic`` and ``fault`` arrays and at least three runs.
+    store : a demseis store with ``seismic`` and ``fault`` arrays and at least three runs, or
+        a list of such stores. Each store is split by its own runs; the batches draw from
+        each store's train runs in proportion to ``weights``, validation pools every store's
+        val runs, and the metrics cover every store's test runs (overall and per store).
     out : the model file (``model.pt``); ``model.json`` and ``model.pt.ckpt`` go beside it.
     steps : optimiser steps in all (with ``resume``, counted from the first start).
-    crop : square training crop (default: 96, or the sections' smaller side when less).
+    crop : square training crop (default: 96, or the smallest sections' smaller side when
+        less).
     batch, base, lr, seed : batch size, U-Net width, Adam learning rate, seed.
     device : ``"cpu"``, ``"cuda"``, ``"cuda:1"`` ... (default: CUDA when available).
     val_every : validate on the ``val`` runs every this many steps and keep the best model
         (default: 5 times per training).
     save_every : write the training state to ``out.ckpt`` every this many steps.
-    resume : continue from ``out.ckpt`` (InputError when there is none).
+    resume : continue from ``out.ckpt`` (InputError when there is none, or when it was
+        trained on other stores, weights or width).
     threads : torch CPU threads.
     progress : a progress bar on stderr.
     log : called with progress lines (None: silent).
+    weights : one positive weight per store (default: equal); store s gives the share
+        ``weights[s] / sum(weights)`` of the training samples drawn.
 
     Returns
     -------
     dict
         ``precision``, ``recall``, ``f1``, ``iou``, ``ap`` (average precision over thresholds)
-        on the test runs at threshold 0.5 and :data:`TOLERANCE_PX`, and the training settings;
-        the same dict is written to ``out.json``.
+        on the test runs of every store pooled, at threshold 0.5 and :data:`TOLERANCE_PX`;
+        ``per_store`` (the same per store, with its weight, share and training samples
+        drawn); ``stores`` and ``weights``; and the training settings. The same dict is
+        written to ``out.json`` and kept in the model file.
     """
     torch = import_torch("demseis train")
     if steps < 1:
@@ -128,57 +142,97 @@ def train_model(store: str | Path, out: str | Path, *, steps: int = 300,
             raise InputError(f"--{name} {value}: use at least 1")
     if val_every is not None and val_every < 1:
         raise InputError(f"--val-every {val_every}: use at least 1")
-    crop = check_trainable(store, crop)
+    stores = [str(s) for s in store] if isinstance(store, (list, tuple)) else [str(store)]
+    if not stores:
+        raise InputError("no store to train on")
+    shares = check_weights(weights, len(stores))
+    weights = [1.0] * len(stores) if weights is None else [float(w) for w in weights]
+    resolved = [str(Path(s).resolve()) for s in stores]
+    twice = sorted({s for s in stores if resolved.count(str(Path(s).resolve())) > 1})
+    if twice:
+        raise InputError(f"store {twice[0]!r} is given twice; give each store once and "
+                         "--weights to weigh it")
+    crop = min(check_trainable(s, crop) for s in stores)
     out = Path(out)
     if not out.parent.is_dir():
         raise InputError(f"--out {str(out)!r}: its directory does not exist")
     ckpt = checkpoint_path(out)
+    # "store": what a single store's model.json said before several stores could be given
+    settings: dict[str, Any] = {**({"store": resolved[0]} if len(stores) == 1 else {}),
+                                "stores": resolved, "weights": weights, "steps": steps,
+                                "crop": crop, "batch": batch, "base": base, "lr": lr,
+                                "seed": seed}
     state = None
     if resume:
         if not ckpt.is_file():
             raise InputError(f"--resume: no training state {str(ckpt)!r} to resume from")
         state = torch.load(ckpt, map_location="cpu", weights_only=True)
-        if state.get("settings", {}).get("store") != str(Path(store).resolve()) \
-                or state["settings"].get("base") != base:
-            raise InputError(f"--resume: {str(ckpt)!r} was trained on another store or width")
+        before = state.get("settings", {})
+        # checkpoints of one store, from before several could be given, hold "store" only
+        stores_before = before.get("stores") or [before.get("store")]
+        w_before = before.get("weights")
+        shares_before = None if w_before is not None and len(w_before) != len(stores_before) \
+            else check_weights(w_before, len(stores_before))
+        if stores_before != resolved or before.get("base") != base or shares_before is None \
+                or not np.allclose(shares_before, shares):
+            raise InputError(f"--resume: {str(ckpt)!r} was trained on other stores, weights or "
+                             "width")
         if int(state["step"]) >= steps:
             raise InputError(f"--resume: {str(ckpt)!r} has done {state['step']} steps already; "
                              "give a larger --steps")
-    settings = {"store": str(Path(store).resolve()), "steps": steps, "crop": crop,
-                "batch": batch, "base": base, "lr": lr, "seed": seed}
 
     def save(training: dict[str, Any]) -> None:
         _atomic_save(torch, {**training, "settings": settings}, ckpt)
 
-    model, info = train_unet(str(store), steps=steps, crop=crop, batch=batch, base=base, lr=lr,
-                             seed=seed, threads=threads, device=device,
-                             val_every=val_every or max(1, steps // 5), patience=steps,
-                             log=log, progress=progress, resume=state, save_every=save_every,
-                             save=save)
-    test = FaultSegDataset(store, inputs=("seismic",), targets=("fault",), split="test")
-    sections = np.stack([test[i][0][0].numpy() for i in range(len(test))])
-    prob = predict_sections(model, sections)
-    result = score_store(prob, str(store), indices=test.indices, threshold=0.5,
-                         tolerance_px=TOLERANCE_PX)
-    o = result.overall
-    metrics = {"precision": _num(o.precision), "recall": _num(o.recall), "f1": _num(o.f1),
-               "iou": _num(o.iou), "ap": _num(o.ap), "threshold": 0.5,
-               "tolerance_px": TOLERANCE_PX, "test_samples": int(len(test)),
-               "test_runs": int(len(np.unique(test.run_ids))),
+    model, info = train_unet(stores if len(stores) > 1 else stores[0], steps=steps, crop=crop,
+                             batch=batch, base=base, lr=lr, seed=seed, threads=threads,
+                             device=device, val_every=val_every or max(1, steps // 5),
+                             patience=steps, log=log, progress=progress, resume=state,
+                             save_every=save_every, save=save, weights=weights)
+    per_store, counts, n_test, n_runs = [], [], 0, 0
+    for i, s in enumerate(stores):
+        test = FaultSegDataset(s, inputs=("seismic",), targets=("fault",), split="test")
+        sections = np.stack([test[j][0][0].numpy() for j in range(len(test))])
+        prob = predict_sections(model, sections)
+        result = score_store(prob, s, indices=test.indices, threshold=0.5,
+                             tolerance_px=TOLERANCE_PX)
+        runs = int(len(np.unique(test.run_ids)))
+        per_store.append({"store": resolved[i], "weight": weights[i], "share": round(shares[i], 4),
+                          "train_samples_drawn": int(info["drawn_per_store"][i]),
+                          **_scores(result.overall), "test_samples": int(len(test)),
+                          "test_runs": runs,
+                          "best_val_f1": (info.get("val_f1_per_store") or [None] * len(stores))[i]})
+        counts.append(result.counts)
+        n_test, n_runs = n_test + len(test), n_runs + runs
+    o = summarise(SampleCounts.concat(counts))  # every store's test samples, pooled
+    metrics = {**_scores(o), "threshold": 0.5, "tolerance_px": TOLERANCE_PX,
+               "test_samples": n_test, "test_runs": n_runs,
                "train_runs": int(info["n_runs"]), "device": info["device"],
                "steps": int(info["steps"]), "best_val_f1": info.get("best_val_f1"),
-               "best_step": info.get("best_step"), **settings}
+               "best_step": info.get("best_step"), **settings, "per_store": per_store}
     blob = {"format": FORMAT, "version": VERSION, "base": base, "target": "fault",
             "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
             "metrics": metrics}
     _atomic_save(torch, blob, out)
     metrics_path(out).write_text(json.dumps(metrics, indent=2) + "\n")
     if log:
-        log(f"test runs ({metrics['test_samples']} samples, tolerance {TOLERANCE_PX} px): "
+        if len(stores) > 1:
+            for r in per_store:
+                log(f"test runs of {r['store']} ({r['test_samples']} samples): precision "
+                    f"{r['precision']:.3f}  recall {r['recall']:.3f}  F1 {r['f1']:.3f}  "
+                    f"AP {r['ap']:.3f}")
+        log(f"test runs{' of every store' if len(stores) > 1 else ''} "
+            f"({metrics['test_samples']} samples, tolerance {TOLERANCE_PX} px): "
             f"precision {metrics['precision']:.3f}  recall {metrics['recall']:.3f}  "
             f"F1 {metrics['f1']:.3f}  AP {metrics['ap']:.3f}")
         log(f"wrote {out} and {metrics_path(out)}")
     return metrics
+
+
+def _scores(o: Any) -> dict[str, float]:
+    """precision, recall, F1, IoU and AP of a ScoreResult, rounded for the JSON."""
+    return {"precision": _num(o.precision), "recall": _num(o.recall), "f1": _num(o.f1),
+            "iou": _num(o.iou), "ap": _num(o.ap)}
 
 
 def _num(x: Any) -> float:

@@ -19,7 +19,7 @@ Everything is seeded; on CPU results repeat for a fixed thread count.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -27,7 +27,7 @@ from tqdm.auto import tqdm
 
 from demseis.datasets import FaultSegDataset
 from demseis.errors import InputError, import_torch
-from demseis.evaluation.scoring import score
+from demseis.evaluation.scoring import SampleCounts, count_samples, summarise
 
 
 def build_unet(base: int = 16):
@@ -97,14 +97,17 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
                checkpoint: str | None = None,
                progress: bool = False, resume: Mapping[str, Any] | None = None,
                save_every: int | None = None,
-               save: Callable[[dict[str, Any]], None] | None = None) -> tuple[Any, dict[str, Any]]:
+               save: Callable[[dict[str, Any]], None] | None = None,
+               weights: Sequence[float] | None = None) -> tuple[Any, dict[str, Any]]:
     """Train :func:`build_unet` on random crops of a store's ``split``.
 
     Parameters
     ----------
     store : a store path (or what :class:`demseis.datasets.FaultSegDataset` accepts), or a
-        list of them: the training set is then their ``split`` samples, drawn so that each
-        store gives the same share of every batch on average (a mix).
+        list of them: the training set is then their ``split`` samples, drawn (with
+        replacement) so that store s gives the share ``weights[s] / sum(weights)`` of every
+        batch on average (a mix; :func:`mix_sampler`).
+    weights : one positive weight per store (default: equal shares); :func:`check_weights`.
     augment : random left-right flips, polarity flips and amplitude scaling (x 0.5 .. 2) of
         each training crop.
     amp : CUDA mixed precision (autocast + gradient scaling); None = on when on CUDA.
@@ -132,7 +135,10 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     Returns
     -------
     (model, info) with info keys steps, epochs, seconds, final_loss, pos_weight, n_samples,
-    n_runs, device.
+    n_runs, device, drawn_per_store (training samples drawn from each store, counted over the
+    steps, a resumed training's included); with validation also best_val_f1 (pooled over
+    every store's val runs: the selection criterion), val_f1_per_store (each store's F1 of
+    the kept model), best_step, stopped_early, val_history.
     """
     torch = import_torch("training")  # lazy: heavy (~2 s), see the module docstring
     from torch.utils.data import DataLoader
@@ -146,6 +152,7 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         torch.set_num_threads(int(threads))
     dev = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
     stores = list(store) if isinstance(store, (list, tuple)) else [store]
+    shares = check_weights(weights, len(stores))
     parts = [FaultSegDataset(s, inputs=("seismic",), targets=(target,), split=split,
                              crop=(crop, crop), seed=seed, where=where,
                              split_fractions=split_fractions) for s in stores]
@@ -157,21 +164,26 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
             raise InputError(f"crop = {crop}; allowed: a multiple of 4, at most {min(h, w)}")
     gen = torch.Generator().manual_seed(seed)
     if len(parts) == 1:
+        from torch.utils.data import RandomSampler  # lazy: torch
+
         ds = parts[0]
-        loader = DataLoader(ds, batch_size=batch, shuffle=True, generator=gen, drop_last=False)
+        # what DataLoader(shuffle=True, generator=gen) draws, with the draws counted
+        draws = _StoreDraws(RandomSampler(ds, generator=gen), [len(ds)])
+        loader = DataLoader(ds, batch_size=batch, sampler=draws, generator=gen, drop_last=False)
     else:
-        from torch.utils.data import ConcatDataset, WeightedRandomSampler  # lazy: torch
+        from torch.utils.data import ConcatDataset  # lazy: torch
 
         ds = _Mixed(parts, ConcatDataset(parts))
-        weights = torch.cat([torch.full((len(p),), 1.0 / len(p)) for p in parts])
-        sampler = WeightedRandomSampler(weights, num_samples=len(ds), generator=gen)
-        loader = DataLoader(ds.concat, batch_size=batch, sampler=sampler, drop_last=False)
+        sizes = [len(p) for p in parts]
+        draws = _StoreDraws(mix_sampler(sizes, shares, gen), sizes)
+        loader = DataLoader(ds.concat, batch_size=batch, sampler=draws, drop_last=False)
     use_amp = (dev.type == "cuda") if amp is None else bool(amp and dev.type == "cuda")
     scaler = torch.amp.GradScaler("cuda", enabled=use_amp)
     if resume is None:
         # fault pixels are rare: weight them by the background / fault ratio of a few batches
         frac = np.mean([float((y > 0).float().mean()) for _, (_, y) in zip(range(8), loader)])
         pos_weight = torch.tensor(min((1 - frac) / max(frac, 1e-6), 50.0), device=dev)
+        draws.counts[:] = 0  # those batches were looked at, not trained on
     else:
         frac = float(resume["fault_fraction"])
         pos_weight = torch.tensor(float(resume["pos_weight"]), device=dev)
@@ -188,11 +200,13 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         opt.load_state_dict(resume["optimizer"])
         step, epoch = int(resume["step"]), int(resume["epoch"])
         best.update(resume["best"])
+        if len(resume.get("drawn", [])) == len(stores):
+            draws.counts[:] = resume["drawn"]
         gen.manual_seed(seed + step)  # a different crop order than the one already trained on
 
     def state() -> dict[str, Any]:
         return training_state(model, opt, step=step, epoch=epoch, pos_weight=float(pos_weight),
-                              fault_fraction=float(frac), best=best)
+                              fault_fraction=float(frac), best=best, drawn=draws.counts)
 
     bar = None
     if progress:
@@ -204,19 +218,30 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         return step >= steps if steps is not None else time.perf_counter() - t0 >= budget
 
     def validate() -> None:
-        prob = predict_sections(model, val[0], device=str(dev))
-        f1 = float(score(prob, val[1], threshold=0.5, tolerance_px=2).f1)
+        counts = [None if x is None else
+                  count_samples(predict_sections(model, x, device=str(dev)), y, 0.5, 2)
+                  for x, y in zip(*val)]
+        # pooled over every store's val sections: the selection criterion
+        f1 = float(summarise(SampleCounts.concat([c for c in counts if c is not None])).f1)
+        each = [None if c is None else round(float(summarise(c).f1), 4) for c in counts]
         best["history"].append((step, round(f1, 4)))
         if f1 > best["f1"]:
-            best.update(f1=f1, step=step, bad=0,
+            best.update(f1=f1, step=step, bad=0, per_store=each,
                         state={k: v.detach().clone() for k, v in model.state_dict().items()})
             if checkpoint:
                 torch.save(best["state"], checkpoint)
         else:
             best["bad"] += 1
         if log:
-            log(f"  step {step:5d}  val F1@2 {f1:.4f}  best {best['f1']:.4f} (step {best['step']})")
+            per = ", ".join("-" if x is None else f"{x:.4f}" for x in each)
+            per = f"  (per store {per})" if len(each) > 1 else ""
+            log(f"  step {step:5d}  val F1@2 {f1:.4f}{per}  best {best['f1']:.4f} "
+                f"(step {best['step']})")
 
+    if log and len(parts) > 1:
+        for s_, part, share in zip(stores, parts, shares):
+            log(f"train: store {str(s_)!r}: {len(part)} samples "
+                f"({len(np.unique(part.run_ids))} runs), share {share:.3f} of the batches")
     if log:
         log(f"train: {len(ds)} samples ({len(np.unique(ds.run_ids))} runs), crop {crop}, "
             f"fault fraction {frac:.4f}, pos_weight {float(pos_weight):.1f}, device {dev}, "
@@ -265,9 +290,10 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
             "final_loss": float(np.mean(losses[-50:])) if losses else float("nan"),
             "pos_weight": round(float(pos_weight), 2), "n_samples": len(ds),
             "n_runs": int(len(np.unique(ds.run_ids))), "device": str(dev), "amp": use_amp,
-            "augment": bool(augment)}
+            "augment": bool(augment), "drawn_per_store": [int(c) for c in draws.counts]}
     if val is not None:
         info.update(best_val_f1=round(best["f1"], 4), best_step=best["step"],
+                    val_f1_per_store=best.get("per_store"),
                     stopped_early=best["bad"] >= patience, val_history=best["history"])
     if log:
         log(f"trained {step} steps ({epoch} epochs) in {info['seconds']:.0f} s, "
@@ -276,31 +302,88 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
 
 
 def training_state(model: Any, opt: Any, *, step: int, epoch: int, pos_weight: float,
-                   fault_fraction: float, best: Mapping[str, Any]) -> dict[str, Any]:
+                   fault_fraction: float, best: Mapping[str, Any],
+                   drawn: Sequence[int] = ()) -> dict[str, Any]:
     """What :func:`train_unet` needs to ``resume``: weights, optimiser, step, epoch, the loss's
-    positive weight and the best validation model so far (plain types and tensors, so that
-    ``torch.load(..., weights_only=True)`` reads it)."""
+    positive weight, the best validation model so far and the samples drawn from each store
+    (plain types and tensors, so that ``torch.load(..., weights_only=True)`` reads it)."""
+    kept = {"f1": float(best["f1"]), "step": int(best["step"]), "state": best["state"],
+            "bad": int(best["bad"]), "history": [list(h) for h in best["history"]]}
+    if best.get("per_store") is not None:
+        kept["per_store"] = [None if x is None else float(x) for x in best["per_store"]]
     return {"model": model.state_dict(), "optimizer": opt.state_dict(), "step": int(step),
             "epoch": int(epoch), "pos_weight": float(pos_weight),
-            "fault_fraction": float(fault_fraction),
-            "best": {"f1": float(best["f1"]), "step": int(best["step"]), "state": best["state"],
-                     "bad": int(best["bad"]), "history": [list(h) for h in best["history"]]}}
+            "fault_fraction": float(fault_fraction), "best": kept,
+            "drawn": [int(c) for c in drawn]}
 
 
-def _validation_set(stores: list, target: str,
-                    split_fractions: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
-    """Whole sections and 0/1 truth of the ``val`` split of every store (runs, not samples)."""
+def check_weights(weights: Sequence[float] | None, n_stores: int) -> list[float]:
+    """The shares ``w / sum(w)`` of the stores' weights (equal shares for None).
+
+    InputError, one line, when their number is not ``n_stores`` or one is not a finite number
+    greater than 0.
+    """
+    if weights is None:
+        return [1.0 / n_stores] * n_stores
+    w = list(weights)
+    if len(w) != n_stores:
+        raise InputError(f"--weights: {len(w)} weight(s) for {n_stores} store(s); give one per "
+                         "store, in the stores' order")
+    for i, x in enumerate(w):
+        ok = isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
+        if not ok or not np.isfinite(x) or x <= 0:
+            raise InputError(f"--weights: weight {i + 1} is {x!r}; each must be a finite number "
+                             "greater than 0")
+    total = float(sum(float(x) for x in w))
+    return [float(x) / total for x in w]
+
+
+def mix_sampler(sizes: Sequence[int], shares: Sequence[float], generator: Any) -> Any:
+    """Indices into the concatenation of datasets of ``sizes``: each draw (with replacement)
+    falls in dataset s with probability ``shares[s]`` and is uniform within it; ``sum(sizes)``
+    draws per epoch. A torch ``WeightedRandomSampler`` drawing from ``generator``."""
+    torch = import_torch("training")  # lazy: heavy (~2 s), see the module docstring
+    from torch.utils.data import WeightedRandomSampler
+
+    # equal shares keep the per-sample weights 1 / size of the mix before weights existed
+    equal = len(set(shares)) == 1
+    w = torch.cat([torch.full((n,), (1.0 if equal else float(sh)) / n)
+                   for n, sh in zip(sizes, shares)])
+    return WeightedRandomSampler(w, num_samples=int(sum(sizes)), generator=generator)
+
+
+class _StoreDraws:
+    """A sampler's indices into the stores' concatenation, passed on and counted per store."""
+
+    def __init__(self, sampler: Any, sizes: Sequence[int]) -> None:
+        self.sampler = sampler
+        self.ends = np.cumsum(sizes)
+        self.counts = np.zeros(len(sizes), np.int64)
+
+    def __len__(self) -> int:
+        return len(self.sampler)
+
+    def __iter__(self) -> Any:
+        for i in self.sampler:
+            self.counts[int(np.searchsorted(self.ends, int(i), side="right"))] += 1
+            yield i
+
+
+def _validation_set(stores: list, target: str, split_fractions: tuple[float, float, float]
+                    ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Whole sections and 0/1 truth of the ``val`` split of each store (runs, not samples), one
+    (M_s, H_s, W_s) array per store (stores may differ in section size), None for a store
+    without val samples."""
     xs, ys = [], []
     for s in stores:
         ds = FaultSegDataset(s, inputs=("seismic",), targets=(target,), split="val",
                              split_fractions=split_fractions)
-        for i in range(len(ds)):
-            x, y = ds[i]
-            xs.append(x[0].numpy())
-            ys.append(y.numpy() > 0)
-    if not xs:
+        pairs = [ds[i] for i in range(len(ds))]
+        xs.append(np.stack([x[0].numpy() for x, _ in pairs]) if pairs else None)
+        ys.append(np.stack([y.numpy() > 0 for _, y in pairs]) if pairs else None)
+    if all(x is None for x in xs):
         raise InputError("val_every: the val split is empty (give split_fractions a val share)")
-    return np.stack(xs), np.stack(ys)
+    return xs, ys
 
 
 class _Mixed:
