@@ -214,9 +214,12 @@ _DECLARED: tuple[Param, ...] = (
            "the width: the base stretches like a rubber sheet under the cover (0 = off); the "
            "DEM grows a fault population above it, the kinematic engine draws one that takes up "
            "the same extension"),
-    # ---- per run: the kinematic engine only ([model] engine = "kinematic") ----------------
+    # ---- per run: the kinematic engine only ([model] engine = "kinematic"; fold_amplitude_m
+    # also the planar engine's) ---------------------------------------------------------------
     _p("fold_amplitude_m", float, "run", 0.0, 0.0, 1.0e4, unit="m",
-       doc="kinematic engine: amplitude of the folding of the layers before faulting (0 = flat)"),
+       doc="kinematic engine: amplitude of the folding of the layers before faulting (0 = "
+           "flat); planar engine: the Gaussian bumps' amplitudes are uniform in [-this, this] "
+           "(at most model height / 6)"),
     _p("fold_kind", str, "run", "gaussian", choices=("gaussian", "sinusoidal"),
        doc="kinematic engine: folds as a sum of 1-4 Gaussian bumps, or one sinusoid"),
     _p("throw_taper", float, "run", 0.5, 0.0, 1.0,
@@ -229,6 +232,25 @@ _DECLARED: tuple[Param, ...] = (
     _p("population_throw_exponent", float, "run", 1.0, 0.3, 3.0,
        doc="kinematic engine: the population's throws follow a power law, cumulative number "
            "N(> t) ~ t^-c with c this exponent (larger: more small faults)"),
+    # ---- per run: the planar engine only ([model] engine = "planar") ------------------------
+    _p("planar_faults", int, "run", 2, 0, 20,
+       doc="planar engine: number of faults of a run (each crosses the whole section)"),
+    _p("planar_dip_min_deg", float, "run", 40.0, 10.0, 89.0, unit="deg",
+       doc="planar engine: smallest fault dip; each fault's dip is uniform in "
+           "[planar_dip_min_deg, planar_dip_max_deg]"),
+    _p("planar_dip_max_deg", float, "run", 80.0, 10.0, 89.0, unit="deg",
+       doc="planar engine: largest fault dip (at least planar_dip_min_deg)"),
+    _p("planar_throw_min_m", float, "run", 10.0, 0.0, 1.0e4, unit="m",
+       doc="planar engine: smallest fault throw (constant along a fault); each fault's throw "
+           "is uniform in [planar_throw_min_m, planar_throw_max_m]"),
+    _p("planar_throw_max_m", float, "run", 60.0, 0.0, 1.0e4, unit="m",
+       doc="planar engine: largest fault throw (at least planar_throw_min_m, at most 0.6 "
+           "model height)"),
+    _p("planar_reverse_fraction", float, "run", 0.5, 0.0, 1.0,
+       doc="planar engine: probability that a fault is reverse (else normal)"),
+    _p("planar_tilt_deg", float, "run", 2.0, 0.0, 30.0, unit="deg",
+       doc="planar engine: largest dip of the planar shear s2(x) = e0 + f x applied after the "
+           "folds: f = tan(a), a uniform in [-planar_tilt_deg, planar_tilt_deg]"),
     # ---- per run: layering ---------------------------------------------------------------
     _p("n_layers", int, "run", 48, 1, 250, doc="number of pre-kinematic layers"),
     _p("layer_thickness_cv", float, "run", 0.0, 0.0, 0.9,
@@ -334,7 +356,10 @@ _DECLARED: tuple[Param, ...] = (
     _p("engine", str, "sweep", "dem", choices=ENGINES, section="model",
        doc="dem: grow faults in the DEM; kinematic: a FaultSeg-style generator (random "
            "layered reflectivity, optional folds, planar or listric faults displaced "
-           "geometrically; no particles, >= 20x faster; demseis.generator.engines.kinematic)"),
+           "geometrically; no particles, >= 20x faster; demseis.generator.engines.kinematic); "
+           "planar: the published FaultSeg recipe as a control (random reflectivity, Gaussian "
+           "folds growing with depth, planar shear, planar faults of constant throw; "
+           "demseis.generator.engines.planar)"),
     _p("n_snapshots", int, "sweep", 4, 2, 1000, section="model",
        doc="snapshots per run, equally spaced in throw; the first is the undeformed reference"),
     _p("sedimentation", bool, "sweep", True, section="model",
@@ -418,7 +443,8 @@ STORED: tuple[Stored, ...] = (
            "-1 if the run has none"),
     Stored("n_elements", "int32", "snapshot", "", "elements in the snapshot (deposits included)"),
     Stored("noise_seed", "uint64", "sample", "", "seed of the sample's noise Generator"),
-    Stored("n_basement_faults", "int8", "run", "", "basement faults of the run (0-5; 0 for structure none)"),
+    Stored("n_basement_faults", "int8", "run", "", "basement faults of the run (0-5; 0 for structure none; "
+           "the planar engine: its faults, 0-20)"),
     Stored("has_fault", "uint8", "snapshot", "", "1 if the fault label has any fault cell"),
     Stored("n_faults", "int16", "snapshot", "", "fault instances in the label"),
     Stored("max_slip_m", "float32", "snapshot", "m", "largest slip on the labelled traces"),

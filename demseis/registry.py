@@ -117,6 +117,7 @@ class Registry(Generic[T]):
 ENGINES: Registry[Any] = Registry("engine", {
     "dem": "demseis.generator.engines.dem:ENGINE",
     "kinematic": "demseis.generator.engines.kinematic:ENGINE",
+    "planar": "demseis.generator.engines.planar:ENGINE",
 })
 
 #: the imaging modes that turn property grids into sections (demseis.seismic.imaging)

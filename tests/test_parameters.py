@@ -111,6 +111,10 @@ GENERATOR_ONLY = {"seed", "n_runs", "renders_per_snapshot", "fault_x_frac", "n_l
                   # the kinematic engine's geometry (demseis.generator.engines.kinematic)
                   "fold_amplitude_m", "throw_taper", "population_faults",
                   "population_throw_exponent",
+                  # the planar engine's geometry (demseis.generator.engines.planar)
+                  "planar_faults", "planar_dip_min_deg", "planar_dip_max_deg",
+                  "planar_throw_min_m", "planar_throw_max_m", "planar_reverse_fraction",
+                  "planar_tilt_deg",
                   # survey sampling and the strata rendering (demseis.generator.survey)
                   "trace_spacing_m", "strata_dz_m", "fault_zone_impedance"}
 NUMERIC = sorted(k for k, p in PARAMS.items() if p.kind in (int, float))

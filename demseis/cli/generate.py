@@ -25,7 +25,8 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
         "Rerunning the same command on an existing store completes only the missing shards.",
     )
     p.add_argument("config", nargs="?", help="TOML config file (default: the quick preset)")
-    p.add_argument("--preset", help="built-in preset: tiny, quick, seed or variety (a CONFIG file overrides its keys)")
+    p.add_argument("--preset", help="built-in preset: tiny, quick, seed, variety, field or planar "
+                   "(a CONFIG file overrides its keys)")
     p.add_argument("--out", required=True, help="output store path (a directory, e.g. data.zarr)")
     p.add_argument("--workers", type=nonneg_int, default=None,
                    help="worker processes (default: all cores; 0 = run in this process, no dask)")

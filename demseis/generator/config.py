@@ -45,7 +45,7 @@ from demseis.parameters import BED_FIELDS, PARAMS, PROPERTY_FIELDS, SCENARIO, Pa
 from demseis.registry import ENGINES
 from demseis.seismic import BedModel, PropertyModel
 
-PRESETS = ("tiny", "quick", "seed", "variety", "field")
+PRESETS = ("tiny", "quick", "seed", "variety", "field", "planar")
 
 
 def _section(name: str) -> dict[str, Param]:

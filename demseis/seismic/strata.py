@@ -218,8 +218,9 @@ def _check_units(unit_bottom_m, unit_top_m, n_layers: int, n_prekinematic: int |
     return bottom, top, int(n_pre)
 
 
-def _thicknesses(height: float, model: BedModel, rng: np.random.Generator) -> np.ndarray:
-    """Bed thicknesses filling ``height`` from the bottom (see the module docstring)."""
+def bed_thicknesses(height: float, model: BedModel, rng: np.random.Generator) -> np.ndarray:
+    """Bed thicknesses filling ``height`` from the bottom (see the module docstring); also
+    the bed spacing of the planar engine's reflectivity series."""
     mu = math.log(model.bed_thickness_median_m)
     batch = int(height / model.bed_thickness_median_m) + 8
     parts: list[np.ndarray] = []
@@ -296,7 +297,7 @@ def draw_strata(unit_bottom_m, unit_top_m, layer_props: LayerProperties, width_m
     cols: dict[str, list[np.ndarray]] = {k: [] for k in (
         "bottom", "top", "facies", "vp", "rho", "lat", "und")}
     for u in range(bottom.size):
-        t = _thicknesses(float(top[u] - bottom[u]), model, rng)
+        t = bed_thicknesses(float(top[u] - bottom[u]), model, rng)
         n = t.size
         b = bottom[u] + np.concatenate(([0.0], np.cumsum(t)[:-1]))
         tp = np.concatenate((b[1:], [top[u]]))

@@ -9,6 +9,8 @@ that parameter are its names, and nothing outside an engine tests an engine's na
   relabelled without running it again;
 - ``"kinematic"`` (:mod:`demseis.generator.engines.kinematic`): layers displaced geometrically
   along the run's basement faults, FaultSeg-style; no particles.
+- ``"planar"`` (:mod:`demseis.generator.engines.planar`): the published FaultSeg recipe as a
+  control (random reflectivity, folds, planar shear, planar faults); no particles.
 
 The path from an engine to a store (:func:`demseis.generator.pipeline.run_shard`)::
 

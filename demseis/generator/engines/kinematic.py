@@ -240,7 +240,7 @@ def unfault(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo, fra
         throw = fraction * f.throw_m * np.clip(1.0 - f.taper * u**2, 0.0, None)
         hanging = (X - x_here) * s > 0
         if maps is not None:
-            _draw_fault(maps, k, f.kind, np.abs(X - x_here) * np.sin(np.radians(dip_here)),
+            draw_fault_labels(maps, k, f.kind, np.abs(X - x_here) * np.sin(np.radians(dip_here)),
                         throw, dip_here, half_m)
         # hanging wall: normal/listric moved down-dip, reverse up-dip; undo it
         sign = -1.0 if f.kind == "reverse" else 1.0
@@ -250,7 +250,7 @@ def unfault(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo, fra
     return X, D - np.interp(X, fold_x, fold)
 
 
-def _draw_fault(maps: dict[str, np.ndarray], k: int, kind: str, perp: np.ndarray,
+def draw_fault_labels(maps: dict[str, np.ndarray], k: int, kind: str, perp: np.ndarray,
                 throw: np.ndarray, dip: np.ndarray, half_m: float) -> None:
     """Labels of fault ``k`` (perpendicular distance ``perp`` of every cell, its local throw
     and dip), in present coordinates, on the cells not yet claimed by a younger fault."""
