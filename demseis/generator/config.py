@@ -357,6 +357,10 @@ def _cross_checks(cfg: Config) -> None:
         raise ConfigError(f"output.rendering = 'strata' needs an engine whose states carry a "
                           f"reference map and stratigraphy, and engine {cfg.model.engine!r} "
                           "has none: set [output] rendering = 'elements'")
+    if cfg.labels.throw_from == "offset" and cfg.output.rendering != "strata":
+        raise ConfigError("labels.throw_from = 'offset' measures the reflectors' offsets on the "
+                          "strata rendering's reference map: set [output] rendering = 'strata' "
+                          "or labels.throw_from = 'slip'")
     engine.check(cfg)
 
 

@@ -27,6 +27,7 @@ from demseis.generator.survey import (damage_factor, fill_gaps, fine_depths, hol
                                       reference_points, substeps, to_time, trace_spacing,
                                       trace_x)
 from demseis.labels import pick_faults, sample_facts, throw_samples
+from demseis.labels.offsets import offset_faults, pair_jumps, window_max
 from demseis.schema import SAMPLE_ARRAYS, engine_labels
 from demseis.seismic import (add_noise, coarse_velocity, imaged_sections, imaging_mode,
                              strata_properties)
@@ -115,13 +116,19 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
         images.update({(key, f): sec for f, sec in zip(freqs, secs)})
     impedance = img.impedance
     vp = img.vp_cell
+    extra = {}
+    if cfg.labels.fault_style == "picks" and cfg.labels.throw_from == "offset":
+        extra[_JUMP] = cell_jumps(cfg, img)
     if t_s is not None:
         fills = {name: SAMPLE_ARRAYS.get(name).fill for name in [*maps, "impedance"]}
-        maps = to_time({**maps, "impedance": impedance, _VP: vp}, img.vp_cell, grid.cell_m, t_s,
-                       {**fills, _VP: 0.0})
+        maps = to_time({**maps, **extra, "impedance": impedance, _VP: vp}, img.vp_cell,
+                       grid.cell_m, t_s, {**fills, _VP: 0.0, _JUMP: 0.0})
         impedance, vp = maps.pop("impedance"), maps.pop(_VP)
+    else:
+        maps = {**maps, **extra}
+    jump = maps.pop(_JUMP, None)
     if cfg.labels.fault_style == "picks":
-        maps = output_picks(cfg, maps, vp)
+        maps = output_picks(cfg, maps, vp, jump)
     facts = sample_facts(maps)
     rendered = {"impedance": impedance}
     codes = param_codes()
@@ -143,13 +150,53 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
 
 #: the interval-velocity map's key while it is taken to time with the labels
 _VP = "_vp_m_s"
+#: the reflector-jump map's key while it is taken to time with the labels
+_JUMP = "_jump_m"
+
+
+def cell_jumps(cfg: Config, img: "ImagingInput") -> np.ndarray:
+    """(nz, ntr) signed jump (m) of the rock's reference elevation across each pair of
+    neighbouring traces (j, j + 1), at column j, on the grid cells
+    (:func:`demseis.labels.offsets.pair_jumps` of the cell centres; 0 in the last column and
+    where there is no rock).
+
+    Raises
+    ------
+    InputError
+        The state has no reference map (``rendering = "elements"``).
+    """
+    if img.y0_cell is None:
+        raise InputError("labels.throw_from = 'offset' measures the reflectors' offsets on the "
+                         "reference map, which [output] rendering = 'elements' has not: set "
+                         "rendering = 'strata' or labels.throw_from = 'slip'")
+    jumps = pair_jumps(img.y0_cell, width=int(cfg.labels.offset_window_traces))
+    return np.nan_to_num(np.pad(jumps, ((0, 0), (0, 1))), nan=0.0)
 
 
 def output_picks(cfg: Config, maps: Mapping[str, np.ndarray], vp_m_s: np.ndarray,
-                 ) -> dict[str, np.ndarray]:
+                 jump_m: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """``maps`` (on the output grid) with their faults drawn as picks
-    (:func:`demseis.labels.picks.pick_faults`), the throw in output samples taken from the
-    output grid's sampling: depth cells, or the two-way time through ``vp_m_s``."""
+    (:func:`demseis.labels.picks.pick_faults`).
+
+    With ``jump_m`` (:func:`cell_jumps` on the output grid; ``[labels] throw_from =
+    "offset"``) the throw of a pixel is the reflectors' offset there in output samples
+    (:func:`demseis.labels.offsets.window_max`), and with ``offset_faults`` the visible
+    offsets no fault explains become faults first (:func:`demseis.labels.offsets.offset_faults`).
+    Otherwise it is the slip's throw at the output grid's sampling: depth cells, or the
+    two-way time through ``vp_m_s``."""
+    t_s = time_axis_of(cfg)
+    if jump_m is not None:
+        lab = cfg.labels
+        if t_s is None:
+            per_m = np.full(jump_m.shape, 1.0 / float(grid_of(cfg).cell_m))
+        else:
+            per_m = 2.0 / (np.maximum(vp_m_s, 1.0) * float(cfg.output.dt_s))
+        if lab.offset_faults:
+            maps = offset_faults(dict(maps), jump_m, per_m, trace_spacing(cfg), 1.0 / per_m,
+                                 min_samples=max(float(lab.min_throw_samples), 1.0),
+                                 min_rows=int(lab.offset_min_rows))
+        pair = np.abs(jump_m[:, :-1]) * 0.5 * (per_m[:, 1:] + per_m[:, :-1])
+        return pick_faults(maps, window_max(pair), lab.picks())
     t_s = time_axis_of(cfg)
     if t_s is None:
         throw = throw_samples(maps["slip_m"], maps["dip_deg"], cell_m=grid_of(cfg).cell_m)
@@ -171,6 +218,8 @@ class ImagingInput:
     substeps : rows per grid cell (1 for ``elements``).
     vp_cell : (nz, ntr) the interval velocity of each grid cell (labels to time).
     impedance : (nz, ntr) the impedance of each grid cell (the optional stored array).
+    y0_cell : (nz, ntr) reference elevation (m) of the rock at each cell centre, NaN where
+        there is none (``strata`` only; None for ``elements``).
     """
 
     vp: np.ndarray
@@ -180,6 +229,7 @@ class ImagingInput:
     substeps: int
     vp_cell: np.ndarray
     impedance: np.ndarray
+    y0_cell: np.ndarray | None = None
 
 
 def imaging_input(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
@@ -225,7 +275,9 @@ def imaging_input(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
     vp = np.maximum(vp, floor)
     vp_cell = coarse_velocity(vp, n)
     impedance = (vp * rho).reshape(grid.nz, n, -1).mean(axis=1)
-    return ImagingInput(vp, rho, grid.cell_m / n, trace_spacing(cfg), n, vp_cell, impedance)
+    y0_cell = np.where(rock, y0, np.nan).reshape(grid.nz, n, -1)[:, n // 2]
+    return ImagingInput(vp, rho, grid.cell_m / n, trace_spacing(cfg), n, vp_cell, impedance,
+                        y0_cell)
 
 
 def _imaging_key(r: Render) -> tuple:

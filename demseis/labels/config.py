@@ -14,6 +14,7 @@ STRAIN_MEASURES = ("total", "cumulative")
 NEIGHBOUR_METHODS = ("radius", "knn")
 FAULT_METHODS = ("slip_trace", "strain_band")
 FAULT_STYLES = ("picks", "traces")
+THROW_SOURCES = ("slip", "offset")
 
 
 @dataclass(frozen=True)
@@ -97,6 +98,18 @@ class LabelConfig:
         [0, 100].
     pick_min_length_px : picks: pieces of a line shorter than this (pixels along the fault) are
         dropped, in [1, 10000].
+    throw_from : picks: what a pixel's throw is: ``"slip"`` (the fault's slip times the sine of
+        its dip, at the output sampling) or ``"offset"`` (the offset of the reflectors across
+        it, measured on the reference map at the output grid: what the section shows;
+        :mod:`demseis.labels.offsets`; needs ``[output] rendering = "strata"``).
+    offset_window_traces : picks with ``throw_from = "offset"``: the odd number of
+        neighbouring trace pairs an offset is measured over, in [1, 9].
+    offset_faults : picks with ``throw_from = "offset"``: visible offsets (at least
+        ``min_throw_samples``, and 1) that no fault label explains become faults
+        (:func:`demseis.labels.offsets.offset_faults`), so every offset the section shows
+        has a label.
+    offset_min_rows : with ``offset_faults``: the fewest output rows such a fault spans, in
+        [2, 1000].
     """
 
     strain_measure: str = "cumulative"
@@ -128,6 +141,10 @@ class LabelConfig:
     pick_smooth_px: float = 2.0
     pick_max_gap_px: int = 4
     pick_min_length_px: int = 5
+    throw_from: str = "slip"
+    offset_window_traces: int = 3
+    offset_faults: bool = False
+    offset_min_rows: int = 10
 
     def validate(self) -> "LabelConfig":
         """Check every field; returns ``self`` so it chains.
@@ -173,6 +190,18 @@ class LabelConfig:
         _number("pick_smooth_px", self.pick_smooth_px, 0.0, 20.0)
         _integer("pick_max_gap_px", self.pick_max_gap_px, 0, 100)
         _integer("pick_min_length_px", self.pick_min_length_px, 1, 10_000)
+        _choice("throw_from", self.throw_from, THROW_SOURCES)
+        _integer("offset_window_traces", self.offset_window_traces, 1, 9)
+        if self.offset_window_traces % 2 != 1:
+            raise ConfigError(f"labels.offset_window_traces = {self.offset_window_traces} is "
+                              "even; allowed: an odd number in [1, 9]")
+        if not isinstance(self.offset_faults, bool):
+            raise ConfigError(f"labels.offset_faults = {self.offset_faults!r}; allowed: true | "
+                              "false")
+        _integer("offset_min_rows", self.offset_min_rows, 2, 1000)
+        if self.offset_faults and self.throw_from != "offset":
+            raise ConfigError("labels.offset_faults = true needs labels.throw_from = 'offset' "
+                              "(it measures the offsets on the reference map)")
         return self
 
     def picks(self) -> PickConfig:
