@@ -26,6 +26,7 @@ mechanical slip (which a fault zone spreads over drag and many strands).
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import binary_closing, binary_dilation, label
 
 
 def pair_jumps(y0_m: np.ndarray, width: int = 3, trend_pairs: int = 4) -> np.ndarray:
@@ -123,8 +124,6 @@ def offset_faults(maps: dict[str, np.ndarray], jump_m: np.ndarray, samples_per_m
     samples_per_m, m_per_row : (H, W) output samples per metre of throw and metres of depth
         per row.
     """
-    from scipy.ndimage import binary_closing, binary_dilation, label
-
     jump = np.nan_to_num(np.asarray(jump_m, dtype=np.float64), nan=0.0)
     off = np.abs(jump) * samples_per_m
     left = np.pad(off, ((0, 0), (1, 0)))[:, :-1]
