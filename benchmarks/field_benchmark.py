@@ -82,14 +82,14 @@ from _field_common import (  # noqa: E402  (benchmarks/ is on sys.path)
 
 #: The controls built in the run: name -> (preset, overrides layered on it as a TOML file
 #: beside ``--preset`` would be; ``[sweep] n_runs`` comes from the command line).
-#: The ``planar`` engine and preset are being added on branch wt-planar (then main): the
-#: preset draws 1-3 planar faults at 40-80 degrees; the steep variant overrides its sweep
-#: keys. Check the key names against demseis/generator/presets/planar.toml when it lands.
+#: The ``planar`` engine and preset come from branch wt-planar (then main): the preset draws
+#: 1-3 planar faults at 40-80 degrees; the steep variant is the one its preset file documents
+#: (demseis/generator/presets/planar.toml).
 CONTROLS = {
     "planar": ("planar", {}),
     "planar_steep": ("planar", {"sweep": {
-        "n_faults": {"dist": "choice", "values": list(range(3, 11))},
-        "dip_deg": {"dist": "uniform", "low": 50.0, "high": 86.0}}}),
+        "planar_faults": {"dist": "choice", "values": list(range(3, 11))},
+        "planar_dip_min_deg": 50.0, "planar_dip_max_deg": 86.0}}),
 }
 #: the scores of every field set, per tolerance
 FIELD_METRICS = ("ods_f1", "ois_f1", "ap")
@@ -223,8 +223,9 @@ def field_sets(args: argparse.Namespace) -> dict[str, list[tuple[str, str, str]]
     return sets
 
 
-def synthetic_test_set(store: str, fr: tuple, max_eval: int) -> tuple[np.ndarray, np.ndarray]:
-    """Whole sections and truth of (at most ``max_eval`` of) the held-out runs of ``store``."""
+def synthetic_test_set(store: str, fr: tuple, max_eval: int) -> tuple[list, list]:
+    """Whole sections and truth of (at most ``max_eval`` of) the held-out runs of ``store``
+    (none when the store has too few runs to hold any out)."""
     from demseis.datasets import FaultSegDataset
 
     ds = FaultSegDataset(store, inputs=("seismic",), targets=("fault",), split="test",
@@ -233,8 +234,7 @@ def synthetic_test_set(store: str, fr: tuple, max_eval: int) -> tuple[np.ndarray
     if len(idx) > max_eval:
         idx = np.sort(np.random.default_rng(12345).choice(len(idx), max_eval, replace=False))
     pairs = [ds[int(i)] for i in idx]
-    return (np.stack([x[0].numpy() for x, _ in pairs]),
-            np.stack([(y.numpy() > 0) for _, y in pairs]))
+    return ([x[0].numpy() for x, _ in pairs], [(y.numpy() > 0) for _, y in pairs])
 
 
 def store_period(store: str, n: int = 32) -> float:
@@ -277,12 +277,14 @@ def item_scores(model, key: str, item: dict, tolerances: list[float], train_peri
         if key not in cache:
             cache[key] = synthetic_test_set(item["store"], item["fr"], item["max_eval"])
         secs, truth = cache[key]
+        out = {"n_sections": len(secs)}
+        if not secs:
+            return out
         from demseis.evaluation.train import predict_sections
 
-        probs = list(predict_sections(model, secs))
-        out = {}
+        probs = list(predict_sections(model, np.stack(secs)))
         for tol in tolerances:
-            r = score_stack(probs, list(truth), tol)
+            r = score_stack(probs, truth, tol)
             out.update({f"{m}_tol{tol:g}": round(float(getattr(r, m)), 4) for m in SYNTH_METRICS})
         return out
     if item["kind"] == "f3":

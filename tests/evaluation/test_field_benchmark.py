@@ -133,8 +133,8 @@ def test_whole_benchmark_on_tiny_stores(bench, field, tiny_store, tmp_path, caps
                 assert 0 <= sc["share_above_0.5"]["mean"] <= 1
         assert set(line["field"]["set"]["1"]["share_above_0.5_by_section"]) == \
             {p.stem[len("seismic_"):] for p in (root / "set").glob("seismic_*")}
-        assert set(line["synthetic"]["kin"]) == {f"{m}_tol{t}" for m in ("f1", "ods_f1", "ap")
-                                                 for t in (3, 2)}
+        assert set(line["synthetic"]["kin"]) == {"n_sections"} | {
+            f"{m}_tol{t}" for m in ("f1", "ods_f1", "ap") for t in (3, 2)}
     mix = lines[2]["stores"]
     assert mix[0] == str(tiny_store) and mix[1] == mix[2] and "kin-" in mix[1]
     assert fig.stat().st_size > 0
@@ -169,3 +169,33 @@ def test_input_errors(bench, common, field, tmp_path):
         bench["main"](["--cache", str(tmp_path / "c")])
     with pytest.raises(InputError, match="--mix"):
         bench["main"](["--mix", f"m={tmp_path / 'none'}:1", "--cache", str(tmp_path / "c")])
+
+
+def _has_planar() -> bool:
+    from demseis.generator.config import PRESETS
+
+    return "planar" in PRESETS
+
+
+@pytest.mark.skipif(not _has_planar(), reason="needs the planar engine and preset")
+def test_planar_controls_are_built_once_with_their_fault_counts(bench, field, tmp_path, capsys):
+    import demseis
+
+    root, _ = field
+    argv = ["--planar", "2", "--planar-steep", "2", "--workers", "0", "--cache",
+            str(tmp_path / "c"), "--field-dir", str(root / "set"), "--seeds", "0",
+            "--steps", "1", "--base", "4", "--crop", "32", "--batch", "2", "--threads", "1",
+            "--device", "cpu", "--max-eval", "2", "--field-scale", "1",
+            "--results", str(tmp_path / "r.json")]
+    assert bench["main"](argv) == 0
+    out = capsys.readouterr()
+    lines = [json.loads(x) for x in out.out.strip().splitlines()]
+    assert [x["model"] for x in lines] == ["planar", "planar_steep"]
+    for line, (lo, hi) in zip(lines, ((1, 3), (3, 10))):
+        # 2 runs hold none out at --test-fraction 0.25: no held-out scores, and no error
+        assert line["synthetic"][line["model"]] == {"n_sections": {
+            "mean": 0.0, "std": 0.0, "min": 0.0, "max": 0.0, "n": 1}}
+        faults = demseis.open(line["stores"][0]).params["planar_faults"]
+        assert lo <= faults.min() and faults.max() <= hi
+    assert bench["main"](argv) == 0
+    assert "building" not in capsys.readouterr().err
