@@ -21,9 +21,10 @@ Every model is :func:`demseis.evaluation.train.build_unet` trained by
 augmentation (flips, polarity, amplitude), budget (``--steps --base --crop --batch --lr``)
 and seeds for all. CUDA with mixed precision when present (default 3000 steps, base 32), else
 the CPU protocol: 600 steps, base 16, crop 96, batch 8. One 600-step CPU training (2 torch
-threads, a 12-run kinematic ``field`` store) took 1047 s on machine A (docs/benchmarks.md: 2
-cores of an AMD EPYC) while other jobs kept its load average at about 6.5: budget for several
-minutes per cell on a quiet machine, tens on a busy one.
+threads, a 12-run kinematic ``field`` store) on machine A (docs/benchmarks.md: 2 cores of an
+AMD EPYC, shared) took 767 s wall and 564 s of CPU with a load average of 3.5-5, and 1047 s
+wall at a load of about 6.5; on 2 idle cores expect no less than about 5 minutes (564 s of
+CPU over 2 threads).
 
 Field sets, scored with :func:`demseis.evaluation.score` (ODS F1, OIS F1 and AP at each
 ``--tolerance``, default 3 px and 2 px), and the share of each section's pixels with
@@ -55,8 +56,9 @@ runs (25 %) of every training store (at most ``--max-eval`` sections each).
 Results accumulate in ``--results`` (JSON): a (training set, seed) already trained with the
 same configuration (stores, budget, device kind) is not retrained, and a score already there
 for the same inputs is not recomputed. Prints one JSON line per training set: mean, std, min,
-max over the seeds of every score. ``--figure`` draws one seed's predictions on every field
-section and F3 beside the masks.
+max over the seeds of every score. ``--figure`` draws one seed's predictions (``--figure-seed``,
+default the first; at the first ``--field-scale``) on every field section and F3 beside the
+masks.
 
     PYTHONPATH=$PWD python benchmarks/field_benchmark.py --store dem=D.zarr --store kin=K.zarr \\
         --planar 64 --field-dir ~/.cache/demseis-field/wrona-tutorial-03 \\
