@@ -2,9 +2,9 @@
 scoring sections of different shapes, and the accumulated results file.
 
 Used by ``benchmarks/field_benchmark.py`` and ``benchmarks/cross_domain.py`` (both put
-``benchmarks/`` on ``sys.path``). The readers are the benchmark's own, in one place
-(:func:`read_section`, :func:`read_mask`), so that a package reader
-(``demseis.evaluation.fieldio``) can replace them.
+``benchmarks/`` on ``sys.path``). The files are read by ``demseis.evaluation.fieldio``; what
+the benchmarks add (a display image as an amplitude, a section drawn at another size than its
+mask, thinned masks) is here, in one place.
 
 Field files are read from wherever the user keeps them (a cache outside the repository):
 nothing here copies them.
@@ -18,86 +18,58 @@ from pathlib import Path
 
 import numpy as np
 
-#: the suffixes read as images, NumPy arrays and SEG-Y
-PNG, NPY, SEGY = (".png",), (".npy",), (".sgy", ".segy")
-
-
-# ---------------------------------------------------------------- readers (swap for fieldio)
+# ----------------------------------------------------------------------------------- readers
 
 def _check_file(path: str | Path, what: str) -> Path:
     from demseis.errors import InputError
+    from demseis.evaluation.fieldio import MASK_SUFFIXES
 
     p = Path(path)
     if not p.is_file():
         raise InputError(f"{what}: {str(p)!r} is not a file")
-    if p.suffix.lower() not in PNG + NPY + SEGY:
+    if p.suffix.lower() not in MASK_SUFFIXES:
         raise InputError(f"{what}: {str(p)!r}: expected a .png, .npy, .sgy or .segy file")
     return p
 
 
-def _image(path: Path) -> np.ndarray:
-    """An image file as an (H, W, C) uint8 array (C = 1 for grey images)."""
-    from PIL import Image
-
-    with Image.open(path) as im:
-        a = np.asarray(im)
-    return a[..., None] if a.ndim == 2 else a
-
-
-def _array2d(path: Path, what: str) -> np.ndarray:
+def _read(reader, path: str | Path, what: str):
+    """``reader(path)`` with ``what`` (the option) at the head of its InputError."""
     from demseis.errors import InputError
 
-    a = np.load(path)
-    if a.ndim != 2:
-        raise InputError(f"{what}: {str(path)!r} holds shape {a.shape}, expected (samples, "
-                         "traces)")
-    return a
+    p = _check_file(path, what)
+    try:
+        return reader(p)
+    except InputError as exc:
+        if p.suffix.lower() in (".sgy", ".segy"):
+            raise InputError(f"{what}: {str(p)!r} is not a readable SEG-Y file: {exc}") from None
+        raise InputError(f"{what}: {exc}") from None
 
 
 def read_section(path: str | Path, what: str = "--field") -> np.ndarray:
-    """A (samples, traces) float32 section from a SEG-Y file (one trace per column), a 2-D
-    ``.npy`` array, or a grey-scale display image (PNG).
+    """A (samples, traces) float32 section (:func:`demseis.evaluation.fieldio.read_section`:
+    SEG-Y, ``.npy`` or a display PNG).
 
-    A display image becomes an amplitude: its grey level (the mean of the colour channels)
-    minus the image's median grey (the background of a grey-scale seismic rendering, which is
-    zero amplitude), scaled to unit RMS. The colour map is assumed monotonic in grey: a
-    red-white-blue rendering does not read this way.
+    A display image becomes an amplitude: its luminance minus the image's median (the
+    background of a grey-scale seismic rendering, which is zero amplitude), scaled to unit
+    RMS. The colour map is assumed monotonic in luminance: a red-white-blue rendering does not
+    read this way.
     """
-    from demseis.errors import InputError
-    from demseis.evaluation.segyfile import read_segy_section
+    from demseis.evaluation.fieldio import read_section as read
 
-    p = _check_file(path, what)
-    suffix = p.suffix.lower()
-    if suffix in SEGY:
-        try:
-            return read_segy_section(p)
-        except InputError as exc:
-            raise InputError(f"{what}: {str(p)!r} is not a readable SEG-Y file: {exc}") from None
-    if suffix in NPY:
-        return _array2d(p, what).astype(np.float32)
-    rgb = _image(p).astype(np.float64)
-    grey = rgb[..., :3].mean(axis=-1) if rgb.shape[-1] >= 3 else rgb[..., 0]
-    grey -= np.median(grey)
+    sec = _read(read, path, what)
+    if Path(path).suffix.lower() != ".png":
+        return sec
+    grey = sec.astype(np.float64) - np.median(sec)
     rms = float(np.sqrt(np.mean(grey ** 2)))
     return (grey / max(rms, 1e-12)).astype(np.float32)
 
 
 def read_mask(path: str | Path, what: str = "--field") -> np.ndarray:
-    """A (samples, traces) bool fault mask: ``.npy`` (> 0 is fault), SEG-Y (> 0.5), or an
-    image of dark lines on a light or transparent background (a pixel is fault where its
-    opacity times darkness exceeds one half)."""
-    from demseis.errors import InputError
-    from demseis.evaluation.segyfile import read_segy_section
+    """A (samples, traces) bool fault mask (:func:`demseis.evaluation.fieldio.read_mask`:
+    ``.npy`` or SEG-Y nonzero, a PNG's pixels that differ from its background)."""
+    from demseis.evaluation.fieldio import read_mask as read
 
-    p = _check_file(path, what)
-    suffix = p.suffix.lower()
-    if suffix in NPY:
-        return _array2d(p, what) > 0
-    if suffix in SEGY:
-        return read_segy_section(p) > 0.5
-    a = _image(p).astype(np.float64) / 255.0
-    colour, alpha = (a[..., :-1], a[..., -1]) if a.shape[-1] in (2, 4) else (a, 1.0)
-    return alpha * (1.0 - colour.mean(axis=-1)) > 0.5
+    return _read(read, path, what)
 
 
 def thin(mask: np.ndarray) -> np.ndarray:
@@ -121,21 +93,19 @@ def thin(mask: np.ndarray) -> np.ndarray:
     return skeletonize(m)
 
 
-def resize(a: np.ndarray, shape: tuple[int, int], order: int = 1) -> np.ndarray:
-    """``a`` resampled to ``shape`` (bilinear for order 1), the corner pixels' centres kept
-    at the corners' centres; smoothed first when shrinking, so that it does not alias."""
+def resize(a: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """``a`` resampled bilinearly to ``shape``
+    (:func:`demseis.evaluation.fieldio.resize_sections`), smoothed first when shrinking so that
+    it does not alias."""
     from scipy import ndimage
 
-    a = np.asarray(a, np.float64)
-    if a.shape == tuple(shape):
-        return a.astype(np.float32)
+    from demseis.evaluation.fieldio import resize_sections
+
+    a = np.asarray(a, np.float32)
     f = [s / n for s, n in zip(shape, a.shape)]
-    if min(f) < 1 and order > 0:
+    if min(f) < 1:
         a = ndimage.gaussian_filter(a, [max(0.0, (1 / x - 1) / 2) for x in f])
-    rows = np.linspace(0, a.shape[0] - 1, shape[0])
-    cols = np.linspace(0, a.shape[1] - 1, shape[1])
-    rr, cc = np.meshgrid(rows, cols, indexing="ij")
-    return ndimage.map_coordinates(a, [rr, cc], order=order, mode="nearest").astype(np.float32)
+    return resize_sections(a[None], shape)[0]
 
 
 def read_pair(section: str | Path, mask: str | Path, *, thin_lines: bool,
@@ -152,7 +122,7 @@ def read_pair(section: str | Path, mask: str | Path, *, thin_lines: bool,
     sec, m = read_section(section, what), read_mask(mask, what)
     if sec.shape != m.shape:
         ratio = [a / b for a, b in zip(sec.shape, m.shape)]
-        if Path(section).suffix.lower() not in PNG or abs(ratio[0] / ratio[1] - 1) > 0.02:
+        if Path(section).suffix.lower() != ".png" or abs(ratio[0] / ratio[1] - 1) > 0.02:
             raise InputError(f"{what}: mask {str(mask)!r} has shape {m.shape}, the section "
                              f"{str(section)!r} has (samples, traces) {sec.shape}")
         sec = resize(sec, m.shape)

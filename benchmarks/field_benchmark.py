@@ -5,7 +5,7 @@ Training sets (each one model per seed):
 
 - ``--store NAME=PATH`` (repeatable): a demseis store;
 - ``--mix NAME=A:w,B:w`` (repeatable): a mix of stores (paths, or names of other training sets)
-  with integer weights, each store giving that share of every batch on average;
+  with weights (default 1), store s giving the share w_s / sum(w) of every batch on average;
 - ``--planar N`` and ``--planar-steep N``: the planar control, built in this run from the
   ``planar`` preset (FaultSeg-style random reflectivity, folds, 1-3 planar faults at 40-80
   degrees; the steep variant 3-10 faults at 50-86 degrees) with N runs, see ``CONTROLS``;
@@ -79,7 +79,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _field_common import (  # noqa: E402  (benchmarks/ is on sys.path)
-    NPY, PNG, SEGY, add_training_args, budget, load_results, machine, read_field, read_pair,
+    add_training_args, budget, load_results, machine, read_field, read_pair,
     read_section, resize, save_results, score_stack)
 
 #: The controls built in the run: name -> (preset, overrides layered on it as a TOML file
@@ -140,16 +140,16 @@ def build_store(name: str, preset: str, overrides: dict, cache: Path, workers: i
     return out
 
 
-def training_sets(args: argparse.Namespace, cache: Path) -> dict[str, list[str]]:
-    """name -> the store paths it trains on (a mix repeats a store as often as its weight)."""
+def training_sets(args: argparse.Namespace, cache: Path) -> dict[str, tuple[list[str], list]]:
+    """name -> (the store paths it trains on, their weights: None for one store)."""
     from demseis.errors import InputError
 
-    sets: dict[str, list[str]] = {}
+    sets: dict[str, tuple[list[str], list | None]] = {}
 
-    def add(name: str, stores: list[str]) -> None:
+    def add(name: str, stores: list[str], weights: list | None = None) -> None:
         if not name or name in sets:
             raise InputError(f"training set name {name!r}: empty or given twice")
-        sets[name] = stores
+        sets[name] = (stores, weights)
 
     for arg in args.store or []:
         name, _, path = arg.partition("=")
@@ -170,17 +170,20 @@ def training_sets(args: argparse.Namespace, cache: Path) -> dict[str, list[str]]
         add(name, [str(build_store(name, preset, over, cache, args.workers))])
     for arg in args.mix or []:
         name, _, spec = arg.partition("=")
-        stores = []
+        stores, weights = [], []
         for part in spec.split(","):
             ref, _, w = part.rpartition(":")
-            if not w.isdigit():  # no weight: 1
-                ref, w = part, "1"
-            paths = sets.get(ref) or ([ref] if Path(ref).is_dir() else None)
-            if not paths or len(paths) != 1 or int(w) < 1:
+            try:
+                w = float(w)
+            except ValueError:  # no weight: 1
+                ref, w = part, 1.0
+            paths = sets[ref][0] if ref in sets else ([ref] if Path(ref).is_dir() else None)
+            if not paths or len(paths) != 1 or not w > 0:
                 raise InputError(f"--mix {arg!r}: {part!r} is not STORE[:WEIGHT] (a store path "
-                                 "or training-set name, an integer weight >= 1)")
-            stores += paths * int(w)
-        add(name, stores)
+                                 "or the name of a one-store training set, a weight > 0)")
+            stores.append(paths[0])
+            weights.append(w)
+        add(name, stores, weights)
     if not sets:
         raise InputError("no training set: give --store, --mix, --planar, --planar-steep or "
                          "--generate")
@@ -200,16 +203,17 @@ def store_id(path: str) -> list:
 def field_sets(args: argparse.Namespace) -> dict[str, list[tuple[str, str, str]]]:
     """set name -> [(section name, section path, mask path)]."""
     from demseis.errors import InputError
+    from demseis.evaluation.fieldio import MASK_SUFFIXES
 
     sets: dict[str, list[tuple[str, str, str]]] = {}
     for d in args.field_dir or []:
         root = Path(d).expanduser()
         pairs = []
         for sec in sorted(root.glob("seismic_*")):
-            if sec.suffix.lower() not in PNG + NPY + SEGY:
+            if sec.suffix.lower() not in MASK_SUFFIXES:
                 continue
             key = sec.stem[len("seismic_"):]
-            masks = [m for m in root.glob(f"mask_{key}.*") if m.suffix.lower() in PNG + NPY + SEGY]
+            masks = [m for m in root.glob(f"mask_{key}.*") if m.suffix.lower() in MASK_SUFFIXES]
             if masks:
                 pairs.append((key, str(sec), str(masks[0])))
         if not pairs:
@@ -329,6 +333,7 @@ def stats(values) -> dict | None:
 def summary_line(name: str, cells: list[dict], items: dict, config: dict) -> dict:
     """The JSON line of one training set: every score's statistics over its seeds."""
     line = {"benchmark": "field_benchmark", "model": name, "stores": config["stores"],
+            "weights": config["weights"],
             "seeds": sorted(c["seed"] for c in cells), **{k: config[k] for k in (
                 "steps", "base", "crop", "batch", "lr", "device")},
             "machine": " | ".join(sorted({c.get("machine", config["machine"]) for c in cells})),
@@ -459,9 +464,8 @@ def main(argv: list[str] | None = None) -> int:
 
     # what every model is scored on: item key -> item; a key names its inputs
     items: dict[str, dict] = {}
-    for store in dict.fromkeys(p for ps in tsets.values() for p in ps):
-        name = next(n for n, ps in tsets.items() if ps == [store]) if [store] in tsets.values() \
-            else Path(store).stem
+    for store in dict.fromkeys(p for ps, _ in tsets.values() for p in ps):
+        name = next((n for n, (ps, _) in tsets.items() if ps == [store]), Path(store).stem)
         items[f"synthetic:{name}:{digest([store_id(store), fr, args.max_eval, tols])}"] = {
             "kind": "synthetic", "name": name, "store": store, "fr": fr,
             "max_eval": args.max_eval}
@@ -481,8 +485,9 @@ def main(argv: list[str] | None = None) -> int:
     panels: dict = {}
     cache_data: dict = {}
     periods: dict[str, float] = {}
-    for name, stores in tsets.items():
-        config = {"stores": stores, "store_ids": [store_id(s) for s in stores], "steps": steps,
+    for name, (stores, weights) in tsets.items():
+        config = {"stores": stores, "weights": weights,
+                  "store_ids": [store_id(s) for s in stores], "steps": steps,
                   "base": base, "crop": args.crop, "batch": args.batch, "lr": args.lr,
                   "device": device.split(":")[0], "augment": True, "amp": cuda,
                   "test_fraction": args.test_fraction}
@@ -502,18 +507,18 @@ def main(argv: list[str] | None = None) -> int:
             if cell is not None and not todo and not want_fig:
                 cells.append(cell)
                 continue
-            weights = cache / "models" / f"{fp}-{seed}.pt"
-            if cell is not None and weights.exists():
+            saved = cache / "models" / f"{fp}-{seed}.pt"
+            if cell is not None and saved.exists():
                 model = build_unet(base)
-                model.load_state_dict(torch.load(weights, map_location="cpu", weights_only=True))
+                model.load_state_dict(torch.load(saved, map_location="cpu", weights_only=True))
                 model.to(device)
             else:
                 print(f"training {name} seed {seed} ({steps} steps)", file=sys.stderr)
                 model, info = train_unet(stores, steps=steps, crop=args.crop, batch=args.batch,
                                          base=base, lr=args.lr, seed=seed, threads=args.threads,
                                          device=device, split_fractions=fr, log=None,
-                                         augment=True, amp=cuda)
-                torch.save(model.state_dict(), weights)
+                                         augment=True, amp=cuda, weights=weights)
+                torch.save(model.state_dict(), saved)
                 results["cells"] = [c for c in results["cells"]
                                     if not (c["config"] == fp and c["seed"] == seed)]
                 cell = {"config": fp, "model": name, "seed": seed, "train": info,

@@ -136,7 +136,7 @@ def test_whole_benchmark_on_tiny_stores(bench, field, tiny_store, tmp_path, caps
         assert set(line["synthetic"]["kin"]) == {"n_sections"} | {
             f"{m}_tol{t}" for m in ("f1", "ods_f1", "ap") for t in (3, 2)}
     mix = lines[2]["stores"]
-    assert mix[0] == str(tiny_store) and mix[1] == mix[2] and "kin-" in mix[1]
+    assert mix[0] == str(tiny_store) and "kin-" in mix[1] and lines[2]["weights"] == [1.0, 2.0]
     assert fig.stat().st_size > 0
     assert len(json.loads(results.read_text())["cells"]) == 6
     # a second visit: one more seed trains only that seed; the built store is reused
@@ -159,7 +159,7 @@ def test_input_errors(bench, common, field, tmp_path):
         bench["main"](["--field-dir", str(tmp_path / "empty"), "--store", "a=x"])
     with pytest.raises(InputError, match="field-scale"):
         bench["main"](["--field-scale", "big"])
-    np.save(tmp_path / "bad.npy", np.zeros((3, 3)))
+    np.save(tmp_path / "bad.npy", np.ones((3, 3)))  # a mask, of another shape
     with pytest.raises(InputError, match="shape"):
         common["read_pair"](root / "sec.npy", tmp_path / "bad.npy", thin_lines=False)
     png = next((root / "set").glob("seismic_*"))
