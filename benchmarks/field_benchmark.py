@@ -84,9 +84,8 @@ from _field_common import (  # noqa: E402  (benchmarks/ is on sys.path)
 
 #: The controls built in the run: name -> (preset, overrides layered on it as a TOML file
 #: beside ``--preset`` would be; ``[sweep] n_runs`` comes from the command line).
-#: The ``planar`` engine and preset come from branch wt-planar (then main): the preset draws
-#: 1-3 planar faults at 40-80 degrees; the steep variant is the one its preset file documents
-#: (demseis/generator/presets/planar.toml).
+#: The ``planar`` preset draws 1-3 planar faults at 40-80 degrees; the steep variant is the one
+#: its preset file documents (demseis/generator/presets/planar.toml).
 CONTROLS = {
     "planar": ("planar", {}),
     "planar_steep": ("planar", {"sweep": {
