@@ -8,8 +8,10 @@ run in each store (the same split for every cell); the mix draws each batch half
 store's train runs on average. Scores: precision / recall / F1 at threshold 0.5 and AP, at
 tolerances 2 and 4 px, of whole-section predictions.
 
-Field input: ``--field SECTION.sgy:MASK.npy`` (repeatable): a 2-D SEG-Y (one trace per column)
-and a (samples, traces) 0/1 mask of the same shape. Each field section is scaled to the median
+Field input: ``--field SECTION:MASK`` (repeatable): a 2-D SEG-Y (one trace per column), .npy
+or display PNG and a (samples, traces) 0/1 mask of the same shape (.npy, SEG-Y or PNG; read
+by ``benchmarks/_field_common.py``, as in ``benchmarks/field_benchmark.py``, the benchmark that
+scores models on labelled field sections). Each field section is scaled to the median
 RMS of the synthetic test sections (field amplitudes have arbitrary units).
 
 Results accumulate in ``--results`` (JSON): a cell (train set, seed) already there for the same
@@ -28,42 +30,19 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
-import os
-import platform
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _field_common import (  # noqa: E402  (benchmarks/ is on sys.path)
+    add_training_args, budget, load_results, machine, read_field, save_results, score_stack)
+
 TRAIN_SETS = ("dem", "kinematic", "mix")
 METRICS = ("precision", "recall", "f1", "ap")
-
-
-def read_field(pairs: list[str]) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(section, mask) pairs from ``SEGY:MASK`` arguments (section (samples, traces) float32)."""
-    import segyio
-
-    from demseis.errors import InputError
-
-    out = []
-    for arg in pairs:
-        if ":" not in arg:
-            raise InputError(f"--field {arg!r}: expected SECTION.sgy:MASK.npy")
-        segy, mask = arg.rsplit(":", 1)
-        for p in (segy, mask):
-            if not Path(p).is_file():
-                raise InputError(f"--field: {p!r} is not a file")
-        try:
-            with segyio.open(segy, ignore_geometry=True) as f:
-                sec = segyio.tools.collect(f.trace[:]).T.astype(np.float32)
-        except Exception as exc:  # segyio raises several kinds
-            raise InputError(f"--field: {segy!r} is not a readable SEG-Y file: {exc}") from exc
-        m = np.load(mask)
-        if m.shape != sec.shape:
-            raise InputError(f"--field: mask {mask!r} has shape {m.shape}, the section "
-                             f"{segy!r} has (samples, traces) {sec.shape}")
-        out.append((sec, (m > 0)))
-    return out
 
 
 def test_sets(args: argparse.Namespace, fr: tuple[float, float, float]) -> dict:
@@ -93,21 +72,12 @@ def test_sets(args: argparse.Namespace, fr: tuple[float, float, float]) -> dict:
 
 def score_set(model, sections, truth, device: str) -> dict:
     """P/R/F1/AP at tolerances 2 and 4 of a model on a test set (sections may differ in shape)."""
-    from demseis.evaluation import score
     from demseis.evaluation.train import predict_sections
 
     probs = [predict_sections(model, np.asarray(s)[None], device=device)[0] for s in sections]
     out = {}
     for tol in (2, 4):
-        if len({p.shape for p in probs}) == 1:
-            r = score(np.stack(probs), np.stack(truth), threshold=0.5, tolerance_px=tol)
-        else:  # field sections of different shapes: score them as one padded stack
-            h = max(p.shape[0] for p in probs)
-            w = max(p.shape[1] for p in probs)
-            pad = lambda a: np.pad(a, ((0, h - a.shape[0]), (0, w - a.shape[1])))  # noqa: E731
-            r = score(np.stack([pad(p) for p in probs]),
-                      np.stack([pad(t.astype(np.uint8)) for t in truth]), threshold=0.5,
-                      tolerance_px=tol)
+        r = score_stack(probs, list(truth), tol)
         for k in METRICS:
             out[f"{k}_tol{tol}"] = round(float(getattr(r, k)), 4)
     return out, probs
@@ -120,18 +90,6 @@ def fingerprint(args: argparse.Namespace, device: str, steps: int, base: int) ->
            "batch": args.batch, "lr": args.lr, "device": device.split(":")[0],
            "test_fraction": args.test_fraction, "max_eval": args.max_eval}
     return hashlib.sha1(json.dumps(key, sort_keys=True).encode()).hexdigest()[:12]
-
-
-def load_results(path: Path) -> dict:
-    if path.exists():
-        return json.loads(path.read_text())
-    return {"benchmark": "cross_domain", "cells": []}
-
-
-def save_results(path: Path, results: dict) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(results, indent=1))
-    os.replace(tmp, path)
 
 
 def matrix(cells: list[dict], config: str) -> dict:
@@ -191,41 +149,27 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--dem", required=True, help="DEM-engine store")
     ap.add_argument("--kin", required=True, help="kinematic-engine store (same grid)")
-    ap.add_argument("--field", action="append", help="SECTION.sgy:MASK.npy (repeatable)")
+    ap.add_argument("--field", action="append", help="SECTION:MASK (repeatable)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     ap.add_argument("--train", nargs="+", choices=TRAIN_SETS, default=list(TRAIN_SETS))
-    ap.add_argument("--steps", type=int, help="optimiser steps (default 3000 CUDA / 200 CPU)")
-    ap.add_argument("--base", type=int, help="U-Net base width (default 32 CUDA / 16 CPU)")
-    ap.add_argument("--crop", type=int, default=96)
-    ap.add_argument("--batch", type=int, default=8)
-    ap.add_argument("--lr", type=float, default=2e-3)
-    ap.add_argument("--threads", type=int, default=2, help="torch CPU threads")
-    ap.add_argument("--test-fraction", type=float, default=0.25, help="share of runs held out")
-    ap.add_argument("--max-eval", type=int, default=48, help="test samples scored per store")
-    ap.add_argument("--device", help="cuda / cpu (default: cuda when available)")
+    add_training_args(ap, 200, "test samples scored per store")
     ap.add_argument("--results", default="cross_domain.json", help="accumulated results (JSON)")
     ap.add_argument("--figure", help="PNG of example predictions of the models trained now")
     args = ap.parse_args(argv)
 
-    import torch
-
     from demseis.evaluation.train import train_unet
 
-    cuda = torch.cuda.is_available() if args.device is None else args.device.startswith("cuda")
-    device = args.device or ("cuda" if cuda else "cpu")
-    steps = args.steps or (3000 if cuda else 200)
-    base = args.base or (32 if cuda else 16)
+    cuda, device, steps, base = budget(args, 200)
     fr = (1.0 - args.test_fraction, 0.0, args.test_fraction)
     config = fingerprint(args, device, steps, base)
     path = Path(args.results)
-    results = load_results(path)
+    results = load_results(path, "cross_domain")
     results.setdefault("configs", {})[config] = {
         "dem": args.dem, "kin": args.kin, "field": args.field or [], "steps": steps,
         "base": base, "crop": args.crop, "batch": args.batch, "lr": args.lr, "device": device,
         "amp": cuda, "augment": True, "test_fraction": args.test_fraction,
         "max_eval": args.max_eval,
-        "machine": (torch.cuda.get_device_name(0) if cuda else
-                    f"{platform.processor() or platform.machine()}, {args.threads} threads")}
+        "machine": machine(cuda, args.threads)}
     sets = test_sets(args, fr)
     stores = {"dem": args.dem, "kinematic": args.kin, "mix": [args.dem, args.kin]}
     done = {(c["train"], c["seed"]) for c in results["cells"] if c["config"] == config}

@@ -70,7 +70,7 @@ def test_whole_benchmark_on_tiny_stores(bench, stores, tmp_path, capsys):
 
 def test_field_input_errors(bench, stores, tmp_path):
     _, _, root = stores
-    np.save(tmp_path / "bad.npy", np.zeros((3, 3)))
+    np.save(tmp_path / "bad.npy", np.ones((3, 3)))  # a mask, of another shape
     with pytest.raises(InputError, match="shape"):
         bench["read_field"]([f"{root / 'field.sgy'}:{tmp_path / 'bad.npy'}"])
     with pytest.raises(InputError, match="not a file"):

@@ -1,0 +1,560 @@
+"""The field benchmark: train the project's U-Net on each training set at one fixed budget and
+score every model on field sections with faults picked by hand.
+
+Training sets (each one model per seed):
+
+- ``--store NAME=PATH`` (repeatable): a demseis store;
+- ``--mix NAME=A:w,B:w`` (repeatable): a mix of stores (paths, or names of other training sets)
+  with weights (default 1), store s giving the share w_s / sum(w) of every batch on average;
+- ``--planar N`` and ``--planar-steep N``: the planar control, built in this run from the
+  ``planar`` preset (FaultSeg-style random reflectivity, folds, 1-3 planar faults at 40-80
+  degrees; the steep variant 3-10 faults at 50-86 degrees) with N runs, see ``CONTROLS``;
+- ``--generate NAME=PRESET:N[:ENGINE]``: another store built from a preset in the same way
+  (e.g. ``kin=field:12:kinematic``, the kinematic engine over the ``field`` preset).
+
+Built stores go to ``--cache`` (``stores/NAME-<config digest>.zarr``); a complete store of the
+same config is reused. Trained models are kept there too (``models/``), so that scoring a new
+field set does not retrain.
+
+Every model is :func:`demseis.evaluation.train.build_unet` trained by
+:func:`demseis.evaluation.train.train_unet` on the train runs (75 %) of its store(s): the same
+augmentation (flips, polarity, amplitude), budget (``--steps --base --crop --batch --lr``)
+and seeds for all. CUDA with mixed precision when present (default 3000 steps, base 32), else
+the CPU protocol: 600 steps, base 16, crop 96, batch 8. One 600-step CPU training (2 torch
+threads, a 12-run kinematic ``field`` store) on machine A (docs/benchmarks.md: 2 cores of an
+AMD EPYC, shared) took 767 s wall and 564 s of CPU with a load average of 3.5-5, and 1047 s
+wall at a load of about 6.5; on 2 idle cores expect no less than about 5 minutes (564 s of
+CPU over 2 threads).
+
+Field sets, scored with :func:`demseis.evaluation.score` (ODS F1, OIS F1 and AP at each
+``--tolerance``, default 3 px and 2 px), and the share of each section's pixels with
+probability above 0.5:
+
+- ``--field-dir DIR`` (repeatable; the set is named after DIR): pairs ``seismic_<key>.*`` /
+  ``mask_<key>.*`` (.png, .npy, .sgy), the layout of the tutorial-03 sections of
+  thilowrona/seismic_deep_learning (``benchmarks/fetch_field.sh`` fetches them);
+- ``--field [NAME=]SECTION:MASK`` (repeatable; set ``field`` unless named).
+
+A display image (PNG) becomes an amplitude (grey level minus the image's median grey, unit
+RMS) and is resampled onto its mask's grid when it was drawn at another size. Hand-drawn
+masks are lines several pixels wide: they are thinned to one-pixel lines (scikit-image's
+skeletonize; ``--no-thin`` keeps them), as the demseis labels are and as the scorer's
+tolerance assumes (a thick label would count its width as missed recall).
+
+``--f3 PATH`` (unlabelled, e.g. ../shared/field/f3_inline.sgy): the share above 0.5 only.
+
+Field scale (``--field-scale``, default ``1 auto``, each reported): the network sees the
+section at its own pixel size (``1``), or resampled by a factor (a number), or by ``auto`` =
+the training stores' median dominant period over the section's
+(:func:`demseis.evaluation.realism.dominant_period`, in samples), so that reflectors are as many
+pixels apart as in training; both axes by the same factor (the faults' pixel dips stay), and
+the probability is resampled back onto the mask's grid before scoring.
+
+Held-out synthetic scores: F1 at threshold 0.5, ODS F1 and AP of every model on the held-out
+runs (25 %) of every training store (at most ``--max-eval`` sections each).
+
+Results accumulate in ``--results`` (JSON): a (training set, seed) already trained with the
+same configuration (stores, budget, device kind) is not retrained, and a score already there
+for the same inputs is not recomputed. Prints one JSON line per training set: mean, std, min,
+max over the seeds of every score. ``--figure`` draws one seed's predictions (``--figure-seed``,
+default the first; at the first ``--field-scale``) on every field section and F3 beside the
+masks.
+
+    PYTHONPATH=$PWD python benchmarks/field_benchmark.py --store dem=D.zarr --store kin=K.zarr \\
+        --planar 64 --field-dir ~/.cache/demseis-field/wrona-tutorial-03 \\
+        --f3 ../shared/field/f3_inline.sgy --results field.json --figure field.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _field_common import (  # noqa: E402  (benchmarks/ is on sys.path)
+    add_training_args, budget, load_results, machine, read_field, read_pair,
+    read_section, resize, save_results, score_stack)
+
+#: The controls built in the run: name -> (preset, overrides layered on it as a TOML file
+#: beside ``--preset`` would be; ``[sweep] n_runs`` comes from the command line).
+#: The ``planar`` preset draws 1-3 planar faults at 40-80 degrees; the steep variant is the one
+#: its preset file documents (demseis/generator/presets/planar.toml).
+CONTROLS = {
+    "planar": ("planar", {}),
+    "planar_steep": ("planar", {"sweep": {
+        "planar_faults": {"dist": "choice", "values": list(range(3, 11))},
+        "planar_dip_min_deg": 50.0, "planar_dip_max_deg": 86.0}}),
+}
+#: the scores of every field set, per tolerance
+FIELD_METRICS = ("ods_f1", "ois_f1", "ap")
+#: the held-out synthetic scores, per tolerance
+SYNTH_METRICS = ("f1", "ods_f1", "ap")
+#: share of a section's pixels above this probability
+SHARE_AT = 0.5
+
+
+def digest(obj) -> str:
+    return hashlib.sha1(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:10]
+
+
+def _file_id(path: str | Path) -> list:
+    """A file's identity in a fingerprint: resolved path, size, modification time."""
+    p = Path(path).resolve()
+    st = p.stat()
+    return [str(p), st.st_size, int(st.st_mtime)]
+
+
+# --------------------------------------------------------------------- training sets
+
+def build_store(name: str, preset: str, overrides: dict, cache: Path, workers: int | None) -> Path:
+    """The store of ``preset`` with ``overrides``, built in ``cache`` unless a complete one of
+    the same config is there."""
+    import tomllib
+
+    import demseis
+    from demseis.generator.config import _merge, parse_config, preset_path
+
+    raw = _merge(tomllib.loads(preset_path(preset).read_text()), overrides)
+    out = cache / "stores" / f"{name}-{digest(raw)}.zarr"
+    if out.exists():
+        done = demseis.open(out).done
+        if done.size and done.all():
+            return out
+    t0 = time.perf_counter()
+    print(f"building {name} ({preset}, {overrides}) in {out}", file=sys.stderr)
+    store = demseis.generate(parse_config(raw, source=f"{name}: preset {preset} + overrides"),
+                             out=out, workers=workers)
+    if not store.done.any():
+        from demseis.errors import InputError
+
+        raise InputError(f"{name}: no run of {out} completed")
+    print(f"built {name} in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
+    return out
+
+
+def training_sets(args: argparse.Namespace, cache: Path) -> dict[str, tuple[list[str], list]]:
+    """name -> (the store paths it trains on, their weights: None for one store)."""
+    from demseis.errors import InputError
+
+    sets: dict[str, tuple[list[str], list | None]] = {}
+
+    def add(name: str, stores: list[str], weights: list | None = None) -> None:
+        if not name or name in sets:
+            raise InputError(f"training set name {name!r}: empty or given twice")
+        sets[name] = (stores, weights)
+
+    for arg in args.store or []:
+        name, _, path = arg.partition("=")
+        if not path or not Path(path).is_dir():
+            raise InputError(f"--store {arg!r}: expected NAME=PATH of a store")
+        add(name, [str(Path(path))])
+    builds = [(n, CONTROLS[n][0], {**CONTROLS[n][1]}, runs) for n, runs in
+              (("planar", args.planar), ("planar_steep", args.planar_steep)) if runs]
+    for arg in args.generate or []:
+        name, _, spec = arg.partition("=")
+        parts = spec.split(":")
+        if len(parts) not in (2, 3) or not parts[1].isdigit():
+            raise InputError(f"--generate {arg!r}: expected NAME=PRESET:N_RUNS[:ENGINE]")
+        over = {"model": {"engine": parts[2]}} if len(parts) == 3 else {}
+        builds.append((name, parts[0], over, int(parts[1])))
+    for name, preset, over, runs in builds:
+        over["sweep"] = {**over.get("sweep", {}), "n_runs": int(runs)}
+        add(name, [str(build_store(name, preset, over, cache, args.workers))])
+    for arg in args.mix or []:
+        name, _, spec = arg.partition("=")
+        stores, weights = [], []
+        for part in spec.split(","):
+            ref, _, w = part.rpartition(":")
+            try:
+                w = float(w)
+            except ValueError:  # no weight: 1
+                ref, w = part, 1.0
+            paths = sets[ref][0] if ref in sets else ([ref] if Path(ref).is_dir() else None)
+            if not paths or len(paths) != 1 or not w > 0:
+                raise InputError(f"--mix {arg!r}: {part!r} is not STORE[:WEIGHT] (a store path "
+                                 "or the name of a one-store training set, a weight > 0)")
+            stores.append(paths[0])
+            weights.append(w)
+        add(name, stores, weights)
+    if not sets:
+        raise InputError("no training set: give --store, --mix, --planar, --planar-steep or "
+                         "--generate")
+    return sets
+
+
+def store_id(path: str) -> list:
+    """A store's identity in a fingerprint: resolved path, samples done, config digest."""
+    import demseis
+
+    s = demseis.open(path)
+    return [str(Path(path).resolve()), int(s.done.sum()), digest(s.config)]
+
+
+# ----------------------------------------------------------------------------- test sets
+
+def field_sets(args: argparse.Namespace) -> dict[str, list[tuple[str, str, str]]]:
+    """set name -> [(section name, section path, mask path)]."""
+    from demseis.errors import InputError
+    from demseis.evaluation.fieldio import MASK_SUFFIXES
+
+    sets: dict[str, list[tuple[str, str, str]]] = {}
+    for d in args.field_dir or []:
+        root = Path(d).expanduser()
+        pairs = []
+        for sec in sorted(root.glob("seismic_*")):
+            if sec.suffix.lower() not in MASK_SUFFIXES:
+                continue
+            key = sec.stem[len("seismic_"):]
+            masks = [m for m in root.glob(f"mask_{key}.*") if m.suffix.lower() in MASK_SUFFIXES]
+            if masks:
+                pairs.append((key, str(sec), str(masks[0])))
+        if not pairs:
+            raise InputError(f"--field-dir {d!r}: no seismic_<key> / mask_<key> pairs")
+        sets[root.name] = pairs
+    for arg in args.field or []:
+        name, eq, pair = arg.partition("=")
+        if not eq or ":" in name:
+            name, pair = "field", arg
+        section, _, mask = pair.rpartition(":")
+        read_field([pair])  # checks the pair now, with its message
+        sets.setdefault(name, []).append((Path(section).stem, section, mask))
+    return sets
+
+
+def synthetic_test_set(store: str, fr: tuple, max_eval: int) -> tuple[list, list]:
+    """Whole sections and truth of (at most ``max_eval`` of) the held-out runs of ``store``
+    (none when the store has too few runs to hold any out)."""
+    from demseis.datasets import FaultSegDataset
+
+    ds = FaultSegDataset(store, inputs=("seismic",), targets=("fault",), split="test",
+                         split_fractions=fr)
+    idx = np.arange(len(ds))
+    if len(idx) > max_eval:
+        idx = np.sort(np.random.default_rng(12345).choice(len(idx), max_eval, replace=False))
+    pairs = [ds[int(i)] for i in idx]
+    return ([x[0].numpy() for x, _ in pairs], [(y.numpy() > 0) for _, y in pairs])
+
+
+def store_period(store: str, n: int = 32) -> float:
+    """Median dominant period (samples) of ``n`` sections of ``store`` spread over it."""
+    import demseis
+    from demseis.evaluation.realism import dominant_period
+
+    s = demseis.open(store)
+    idx = np.flatnonzero(s.done)
+    idx = idx[np.linspace(0, idx.size - 1, min(n, idx.size)).astype(int)]
+    return float(np.median([dominant_period(s.sample(int(i))["seismic"]) for i in idx]))
+
+
+def scale_factor(scale: str, train_period: float, section: np.ndarray) -> float:
+    """The resampling factor of ``section`` for ``--field-scale`` value ``scale``."""
+    if scale != "auto":
+        return float(scale)
+    from demseis.evaluation.realism import dominant_period
+
+    return train_period / dominant_period(section)
+
+
+def predict(model, section: np.ndarray, factor: float) -> np.ndarray:
+    """Fault probability of ``section`` resampled by ``factor``, on the section's own grid."""
+    from demseis.evaluation.model import predict_array
+
+    if abs(factor - 1.0) < 1e-3:
+        return predict_array(model, section)
+    shape = tuple(max(8, int(round(n * factor))) for n in section.shape)
+    return resize(predict_array(model, resize(section, shape)), section.shape)
+
+
+# --------------------------------------------------------------------------------- cells
+
+def item_scores(model, key: str, item: dict, tolerances: list[float], train_period: float,
+                cache: dict) -> dict:
+    """The scores of one item (a field set at one scale, F3 at one scale, or a store's held-out
+    runs) of one model."""
+    if item["kind"] == "synthetic":
+        if key not in cache:
+            cache[key] = synthetic_test_set(item["store"], item["fr"], item["max_eval"])
+        secs, truth = cache[key]
+        out = {"n_sections": len(secs)}
+        if not secs:
+            return out
+        from demseis.evaluation.train import predict_sections
+
+        probs = list(predict_sections(model, np.stack(secs)))
+        for tol in tolerances:
+            r = score_stack(probs, truth, tol)
+            out.update({f"{m}_tol{tol:g}": round(float(getattr(r, m)), 4) for m in SYNTH_METRICS})
+        return out
+    if item["kind"] == "f3":
+        if "f3" not in cache:
+            cache["f3"] = read_section(item["path"], "--f3")
+        sec = cache["f3"]
+        f = scale_factor(item["scale"], train_period, sec)
+        prob = predict(model, sec, f)
+        return {"share_above_0.5": round(float((prob > SHARE_AT).mean()), 5),
+                "factor": round(f, 4), "_prob": prob}
+    secs = []
+    for name, s, m in item["pairs"]:
+        if (s, m) not in cache:
+            cache[(s, m)] = read_pair(s, m, thin_lines=item["thin"])
+        secs.append((name, *cache[(s, m)]))
+    probs, factors = [], []
+    for _, sec, _ in secs:
+        factors.append(scale_factor(item["scale"], train_period, sec))
+        probs.append(predict(model, sec, factors[-1]))
+    out = {"share_above_0.5": {n: round(float((p > SHARE_AT).mean()), 5)
+                               for (n, _, _), p in zip(secs, probs)},
+           "factor": {n: round(f, 4) for (n, _, _), f in zip(secs, factors)},
+           "_prob": probs}
+    for tol in tolerances:
+        r = score_stack(probs, [t for _, _, t in secs], tol)
+        out.update({f"{m}_tol{tol:g}": round(float(getattr(r, m)), 4) for m in FIELD_METRICS})
+    return out
+
+
+def stats(values) -> dict | None:
+    """mean, std (n - 1), min, max and n of ``values`` (None when there are none)."""
+    v = np.asarray(values, dtype=float)
+    if v.size == 0:
+        return None
+    return {"mean": round(float(v.mean()), 4),
+            "std": round(float(v.std(ddof=1)) if v.size > 1 else 0.0, 4),
+            "min": round(float(v.min()), 4), "max": round(float(v.max()), 4), "n": int(v.size)}
+
+
+def summary_line(name: str, cells: list[dict], items: dict, config: dict) -> dict:
+    """The JSON line of one training set: every score's statistics over its seeds."""
+    line = {"benchmark": "field_benchmark", "model": name, "stores": config["stores"],
+            "weights": config["weights"],
+            "seeds": sorted(c["seed"] for c in cells), **{k: config[k] for k in (
+                "steps", "base", "crop", "batch", "lr", "device")},
+            "machine": " | ".join(sorted({c.get("machine", config["machine"]) for c in cells})),
+            "train_seconds": stats([c["train"]["seconds"] for c in cells]),
+            "score_seconds": stats([c["score_seconds"] for c in cells if "score_seconds" in c]),
+            "field": {}, "f3": {}, "synthetic": {}}
+    for key, item in items.items():
+        got = [c["scores"][key] for c in cells if key in c["scores"]]
+        if not got:
+            continue
+        if item["kind"] == "synthetic":
+            line["synthetic"][item["name"]] = {m: stats([g[m] for g in got]) for m in got[0]}
+        elif item["kind"] == "f3":
+            line["f3"][item["scale"]] = {"share_above_0.5": stats(
+                [g["share_above_0.5"] for g in got]), "factor": got[0]["factor"]}
+        else:
+            out = {m: stats([g[m] for g in got]) for m in got[0]
+                   if m not in ("share_above_0.5", "factor")}
+            out["share_above_0.5"] = stats([np.mean(list(g["share_above_0.5"].values()))
+                                            for g in got])
+            out["share_above_0.5_by_section"] = {
+                s: round(float(np.mean([g["share_above_0.5"][s] for g in got])), 5)
+                for s in got[0]["share_above_0.5"]}
+            out["factor"] = got[0]["factor"]
+            line["field"].setdefault(item["name"], {})[item["scale"]] = out
+    return line
+
+
+# -------------------------------------------------------------------------------- figure
+
+def draw(path: Path, panels: dict, sections: list[tuple[str, np.ndarray, np.ndarray | None]],
+         title: str) -> None:
+    """Rows: field sections (and F3); columns: the section with its mask, then each model's
+    probability (shown above 0.2)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from scipy import ndimage
+
+    models = list(panels)
+    fig, axes = plt.subplots(len(sections), 1 + len(models), squeeze=False,
+                             figsize=(3.6 * (1 + len(models)), 2.0 * len(sections)))
+    for i, (name, sec, mask) in enumerate(sections):
+        clip = float(np.percentile(np.abs(sec), 99))
+        for j in range(1 + len(models)):
+            ax = axes[i, j]
+            ax.imshow(sec, cmap="gray", vmin=-clip, vmax=clip, aspect="auto")
+            if j == 0:
+                if mask is not None:  # one-pixel lines, drawn 3 px wide to show at this size
+                    thick = ndimage.binary_dilation(mask)
+                    ax.imshow(np.ma.masked_equal(thick.astype(float), 0), cmap="autumn",
+                              aspect="auto", interpolation="nearest")
+                ax.set_title(f"{name}" + (" (mask)" if mask is not None else " (no labels)"),
+                             fontsize=8)
+            else:
+                prob = panels[models[j - 1]][name]
+                ax.imshow(np.ma.masked_less(prob, 0.2), cmap="magma_r", vmin=0, vmax=1,
+                          aspect="auto", alpha=0.85)
+                ax.set_title(f"{models[j - 1]}: {100 * (prob > SHARE_AT).mean():.1f} % > 0.5",
+                             fontsize=8)
+            ax.set_xticks([])
+            ax.set_yticks([])
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
+# ---------------------------------------------------------------------------------- main
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--store", action="append", metavar="NAME=PATH", help="a training store")
+    ap.add_argument("--mix", action="append", metavar="NAME=A:w,B:w",
+                    help="a mixed training set: store paths or training-set names, weights")
+    ap.add_argument("--planar", type=int, metavar="N_RUNS",
+                    help="build and train the planar control")
+    ap.add_argument("--planar-steep", type=int, metavar="N_RUNS",
+                    help="build and train the steep planar control (3-10 faults, 50-86 degrees)")
+    ap.add_argument("--generate", action="append", metavar="NAME=PRESET:N[:ENGINE]",
+                    help="build a store from a preset and train on it")
+    ap.add_argument("--cache", default=str(Path.home() / ".cache" / "demseis-bench" / "field"),
+                    help="built stores and trained models")
+    ap.add_argument("--workers", type=int, help="sweep workers for built stores (0: in process)")
+    ap.add_argument("--field-dir", action="append", metavar="DIR",
+                    help="seismic_<key>.* / mask_<key>.* pairs (a field set named after DIR)")
+    ap.add_argument("--field", action="append", metavar="[NAME=]SECTION:MASK",
+                    help="one labelled section (.png, .npy, .sgy) of field set NAME (field)")
+    ap.add_argument("--no-thin", action="store_true", help="score masks as drawn, not thinned")
+    ap.add_argument("--f3", metavar="PATH", help="an unlabelled section (F3): share above 0.5")
+    ap.add_argument("--field-scale", nargs="+", default=["1", "auto"],
+                    help="resampling of field sections: 1, auto (dominant periods) or a factor")
+    ap.add_argument("--tolerance", type=float, nargs="+", default=[3.0, 2.0],
+                    help="matching distances (px)")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
+    add_training_args(ap, 600, "held-out sections scored per store")
+    ap.add_argument("--results", default="field_benchmark.json", help="accumulated results")
+    ap.add_argument("--figure", help="PNG: one seed's predictions beside the masks")
+    ap.add_argument("--figure-seed", type=int, help="the seed drawn (default: the first)")
+    args = ap.parse_args(argv)
+    from demseis.errors import InputError
+
+    for s in args.field_scale:
+        if s != "auto":
+            try:
+                ok = float(s) > 0
+            except ValueError:
+                ok = False
+            if not ok:
+                raise InputError(f"--field-scale {s!r}: expected auto or a factor > 0")
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    import torch
+
+    from demseis.evaluation.train import build_unet, train_unet
+
+    cuda, device, steps, base = budget(args, 600)
+    fr = (1.0 - args.test_fraction, 0.0, args.test_fraction)
+    tols = sorted(set(args.tolerance), key=args.tolerance.index)
+    cache = Path(args.cache).expanduser()
+    (cache / "models").mkdir(parents=True, exist_ok=True)
+    fsets = field_sets(args)
+    tsets = training_sets(args, cache)
+
+    # what every model is scored on: item key -> item; a key names its inputs
+    items: dict[str, dict] = {}
+    for store in dict.fromkeys(p for ps, _ in tsets.values() for p in ps):
+        name = next((n for n, (ps, _) in tsets.items() if ps == [store]), Path(store).stem)
+        items[f"synthetic:{name}:{digest([store_id(store), fr, args.max_eval, tols])}"] = {
+            "kind": "synthetic", "name": name, "store": store, "fr": fr,
+            "max_eval": args.max_eval}
+    for scale in args.field_scale:
+        for fname, pairs in fsets.items():
+            ids = [_file_id(s) + _file_id(m) for _, s, m in pairs]
+            items[f"field:{fname}:{scale}:{digest([ids, not args.no_thin, tols])}"] = {
+                "kind": "field", "name": fname, "scale": scale, "pairs": pairs,
+                "thin": not args.no_thin}
+        if args.f3:
+            items[f"f3:{scale}:{digest(_file_id(args.f3))}"] = {
+                "kind": "f3", "scale": scale, "path": args.f3}
+
+    path = Path(args.results)
+    results = load_results(path, "field_benchmark")
+    fig_seed = args.figure_seed if args.figure_seed is not None else args.seeds[0]
+    panels: dict = {}
+    cache_data: dict = {}
+    periods: dict[str, float] = {}
+    for name, (stores, weights) in tsets.items():
+        config = {"stores": stores, "weights": weights,
+                  "store_ids": [store_id(s) for s in stores], "steps": steps,
+                  "base": base, "crop": args.crop, "batch": args.batch, "lr": args.lr,
+                  "device": device.split(":")[0], "augment": True, "amp": cuda,
+                  "test_fraction": args.test_fraction}
+        fp = digest({k: v for k, v in config.items() if k != "stores"})
+        results.setdefault("configs", {}).setdefault(fp, config)
+        config["machine"] = machine(cuda, args.threads)
+        for s in stores if "auto" in args.field_scale else ():
+            if s not in periods:
+                periods[s] = store_period(s)
+        train_period = float(np.median([periods[s] for s in stores])) if periods else 1.0
+        cells = []
+        for seed in args.seeds:
+            cell = next((c for c in results["cells"] if c["config"] == fp and c["seed"] == seed),
+                        None)
+            todo = [k for k in items if cell is None or k not in cell["scores"]]
+            want_fig = args.figure and seed == fig_seed
+            if cell is not None and not todo and not want_fig:
+                cells.append(cell)
+                continue
+            saved = cache / "models" / f"{fp}-{seed}.pt"
+            if cell is not None and saved.exists():
+                model = build_unet(base)
+                model.load_state_dict(torch.load(saved, map_location="cpu", weights_only=True))
+                model.to(device)
+            else:
+                print(f"training {name} seed {seed} ({steps} steps)", file=sys.stderr)
+                model, info = train_unet(stores, steps=steps, crop=args.crop, batch=args.batch,
+                                         base=base, lr=args.lr, seed=seed, threads=args.threads,
+                                         device=device, split_fractions=fr, log=None,
+                                         augment=True, amp=cuda, weights=weights)
+                torch.save(model.state_dict(), saved)
+                results["cells"] = [c for c in results["cells"]
+                                    if not (c["config"] == fp and c["seed"] == seed)]
+                cell = {"config": fp, "model": name, "seed": seed, "train": info,
+                        "machine": config["machine"], "scores": {}}
+                results["cells"].append(cell)
+                todo = list(items)
+            if want_fig:  # the drawn predictions are made again (they are not kept)
+                todo += [k for k, it in items.items() if k not in todo and it["kind"] != "synthetic"
+                         and it["scale"] == args.field_scale[0]]
+            t0 = time.perf_counter()
+            for key in todo:
+                got = item_scores(model, key, items[key], tols, train_period, cache_data)
+                probs = got.pop("_prob", None)
+                cell["scores"][key] = got
+                scale = items[key].get("scale")
+                if want_fig and probs is not None and scale == args.field_scale[0]:
+                    names = ["F3"] if items[key]["kind"] == "f3" else \
+                        [f"{items[key]['name']}/{n}" for n, _, _ in items[key]["pairs"]]
+                    probs = [probs] if items[key]["kind"] == "f3" else probs
+                    panels.setdefault(name, {}).update(zip(names, probs))
+            cell["score_seconds"] = round(time.perf_counter() - t0, 1)
+            save_results(path, results)  # after every cell: an interrupted run loses one cell
+            cells.append(cell)
+        print(json.dumps(summary_line(name, cells, items, results["configs"][fp])), flush=True)
+    if args.figure and panels:
+        sections = [(f"{it['name']}/{n}", *cache_data[(s, m)]) for it in items.values()
+                    if it["kind"] == "field" and it["scale"] == args.field_scale[0]
+                    for n, s, m in it["pairs"]]
+        if args.f3:
+            sections.append(("F3", cache_data["f3"], None))
+        note = (" F3 Netherlands data courtesy of dGB Earth Sciences, CC BY-SA 3.0; the figure "
+                "is CC BY-SA 3.0." if args.f3 else "")
+        draw(Path(args.figure), panels, sections,
+             f"fault probability (> 0.2), seed {fig_seed}, field scale "
+             f"{args.field_scale[0]}, {steps} steps, base {base}.{note}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,201 @@
+"""benchmarks/field_benchmark.py end to end on tiny stores on the CPU, with a made-up "field" set
+(display PNG + hand-drawn-like mask PNG written here from a synthetic section: no field data);
+its readers, thinning and scoring helper."""
+
+from __future__ import annotations
+
+import json
+import runpy
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("torch")
+
+from demseis.errors import InputError  # noqa: E402
+
+BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "field_benchmark.py"
+COMMON = BENCH.with_name("_field_common.py")
+
+
+@pytest.fixture(scope="module")
+def bench():
+    return runpy.run_path(str(BENCH), run_name="field_benchmark")
+
+
+@pytest.fixture(scope="module")
+def common():
+    """The readers, thinning and scoring helper the benchmark uses."""
+    return runpy.run_path(str(COMMON), run_name="_field_common")
+
+
+def _png(path: Path, arr: np.ndarray, mode: str) -> None:
+    from PIL import Image
+
+    Image.fromarray(arr, mode).save(path)
+
+
+@pytest.fixture(scope="module")
+def field(tmp_path_factory, tiny_store):
+    """A field set in the tutorial-03 layout: seismic_<key>.png drawn 1.5 times the size of its
+    mask_<key>.png (black lines 3 px wide on a transparent background); and the truth."""
+    import demseis
+    from scipy import ndimage
+
+    from demseis.seismic.segy import write_segy
+
+    root = tmp_path_factory.mktemp("field")
+    d = root / "set"
+    d.mkdir()
+    s = demseis.open(tiny_store)
+    keys = [i for i in range(len(s)) if s.sample(i)["fault"].any()][:2]
+    truth = {}
+    for k in keys:
+        smp = s.sample(k)
+        sec, mask = smp["seismic"], smp["fault"] > 0
+        h, w = sec.shape
+        big = ndimage.zoom(sec, 1.5, order=1)
+        grey = np.clip(128 + 40 * big / np.sqrt(np.mean(big ** 2)), 0, 255).astype(np.uint8)
+        _png(d / f"seismic_s{k}.png", np.repeat(grey[..., None], 3, axis=-1), "RGB")
+        rgba = np.zeros((h, w, 4), np.uint8)
+        rgba[..., 3] = 255 * ndimage.binary_dilation(mask, iterations=1)
+        _png(d / f"mask_s{k}.png", rgba, "RGBA")
+        truth[f"s{k}"] = (sec, mask)
+    smp = s.sample(keys[0])
+    write_segy(smp["seismic"] * 1000.0, root / "f3.sgy", x0_m=0.0, cell_m=10.0, top_m=0.0)
+    np.save(root / "sec.npy", smp["seismic"])
+    np.save(root / "mask.npy", smp["fault"] > 0)
+    return root, truth
+
+
+def test_png_readers_give_back_the_section_and_thin_lines(common, field):
+    root, truth = field
+    for key, (sec, mask) in truth.items():
+        got, m = common["read_pair"](root / "set" / f"seismic_{key}.png",
+                                    root / "set" / f"mask_{key}.png", thin_lines=True)
+        assert got.shape == sec.shape == m.shape
+        assert abs(float(np.sqrt(np.mean(common["read_section"](
+            root / "set" / f"seismic_{key}.png") ** 2))) - 1) < 1e-3  # unit RMS
+        assert np.corrcoef(got.ravel(), sec.ravel())[0, 1] > 0.9
+        drawn = common["read_mask"](root / "set" / f"mask_{key}.png")
+        assert drawn.sum() > 2 * mask.sum()                    # drawn 3 px wide
+        assert m.sum() < 1.5 * mask.sum()                      # thinned back to about 1 px
+        r = common["score_stack"]([m.astype(np.float32)], [mask], 1.0)
+        assert r.precision > 0.95 and r.recall > 0.9
+
+
+def test_scoring_helper_perfect_and_blank(common, field):
+    _, truth = field
+    masks = [m for _, m in truth.values()] + [np.pad(next(iter(truth.values()))[1], 3)]
+    perfect = common["score_stack"]([m.astype(np.float32) for m in masks], masks, 3.0)
+    assert perfect.ods_f1 == 1.0 and perfect.ois_f1 == 1.0 and perfect.ap == pytest.approx(1.0)
+    blank = common["score_stack"]([np.zeros(m.shape, np.float32) for m in masks], masks, 3.0)
+    assert blank.ods_f1 == 0.0 and blank.ois_f1 == 0.0
+
+
+def test_thin_without_scikit_image(common, monkeypatch):
+    import sys
+
+    line = np.zeros((20, 20), bool)
+    line[:, 8:11] = True                                       # a vertical line 3 px wide
+    monkeypatch.setitem(sys.modules, "skimage.morphology", None)
+    thin = common["thin"](line)
+    assert thin.sum() == 20 and thin[:, 9].all()
+
+
+def test_whole_benchmark_on_tiny_stores(bench, field, tiny_store, tmp_path, capsys):
+    root, _ = field
+    results, fig, cache = tmp_path / "fb.json", tmp_path / "fb.png", tmp_path / "cache"
+    argv = ["--store", f"dem={tiny_store}", "--generate", "kin=tiny:3:kinematic",
+            "--mix", "mix=dem:1,kin:2", "--field-dir", str(root / "set"),
+            "--field", f"npy={root / 'sec.npy'}:{root / 'mask.npy'}", "--f3", str(root / "f3.sgy"),
+            "--seeds", "0", "1", "--steps", "2", "--base", "4", "--crop", "32", "--batch", "2",
+            "--threads", "1", "--device", "cpu", "--test-fraction", "0.5", "--max-eval", "4",
+            "--workers", "0", "--cache", str(cache), "--results", str(results),
+            "--figure", str(fig)]
+    assert bench["main"](argv) == 0
+    out = capsys.readouterr()
+    lines = [json.loads(x) for x in out.out.strip().splitlines()]
+    assert [x["model"] for x in lines] == ["dem", "kin", "mix"]
+    assert out.err.count("training ") == 6 and out.err.count("building kin") == 1
+    for line in lines:
+        assert line["seeds"] == [0, 1] and line["steps"] == 2 and line["base"] == 4
+        assert line["device"] == "cpu" and line["machine"] and line["train_seconds"]["n"] == 2
+        assert set(line["field"]) == {"set", "npy"} and set(line["f3"]) == {"1", "auto"}
+        assert set(line["synthetic"]) == {"dem", "kin"}
+        for scales in line["field"].values():
+            for sc in scales.values():
+                for m in ("ods_f1", "ois_f1", "ap"):
+                    for t in (3, 2):
+                        v = sc[f"{m}_tol{t}"]
+                        assert v["n"] == 2 and 0 <= v["min"] <= v["mean"] <= v["max"] <= 1
+                assert 0 <= sc["share_above_0.5"]["mean"] <= 1
+        assert set(line["field"]["set"]["1"]["share_above_0.5_by_section"]) == \
+            {p.stem[len("seismic_"):] for p in (root / "set").glob("seismic_*")}
+        assert set(line["synthetic"]["kin"]) == {"n_sections"} | {
+            f"{m}_tol{t}" for m in ("f1", "ods_f1", "ap") for t in (3, 2)}
+    mix = lines[2]["stores"]
+    assert mix[0] == str(tiny_store) and "kin-" in mix[1] and lines[2]["weights"] == [1.0, 2.0]
+    assert fig.stat().st_size > 0
+    assert len(json.loads(results.read_text())["cells"]) == 6
+    # a second visit: one more seed trains only that seed; the built store is reused
+    argv[argv.index("--seeds") + 1: argv.index("--seeds") + 3] = ["0", "1", "2"]
+    assert bench["main"](argv[:-2]) == 0
+    out = capsys.readouterr()
+    assert out.err.count("training ") == 3 and "building" not in out.err
+    assert all(json.loads(x)["seeds"] == [0, 1, 2] for x in out.out.strip().splitlines())
+    # a new tolerance is scored with the saved models, nothing is trained
+    assert bench["main"](argv[:-2] + ["--tolerance", "1"]) == 0
+    out = capsys.readouterr()
+    assert "training " not in out.err
+    assert "ods_f1_tol1" in json.loads(out.out.splitlines()[0])["field"]["set"]["auto"]
+
+
+def test_input_errors(bench, common, field, tmp_path):
+    root, _ = field
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(InputError, match="no seismic_<key>"):
+        bench["main"](["--field-dir", str(tmp_path / "empty"), "--store", "a=x"])
+    with pytest.raises(InputError, match="field-scale"):
+        bench["main"](["--field-scale", "big"])
+    np.save(tmp_path / "bad.npy", np.ones((3, 3)))  # a mask, of another shape
+    with pytest.raises(InputError, match="shape"):
+        common["read_pair"](root / "sec.npy", tmp_path / "bad.npy", thin_lines=False)
+    png = next((root / "set").glob("seismic_*"))
+    with pytest.raises(InputError, match="shape"):  # a display image of another aspect ratio
+        common["read_pair"](png, tmp_path / "bad.npy", thin_lines=False)
+    with pytest.raises(InputError, match="no training set"):
+        bench["main"](["--cache", str(tmp_path / "c")])
+    with pytest.raises(InputError, match="--mix"):
+        bench["main"](["--mix", f"m={tmp_path / 'none'}:1", "--cache", str(tmp_path / "c")])
+
+
+def _has_planar() -> bool:
+    from demseis.generator.config import PRESETS
+
+    return "planar" in PRESETS
+
+
+@pytest.mark.skipif(not _has_planar(), reason="needs the planar engine and preset")
+def test_planar_controls_are_built_once_with_their_fault_counts(bench, field, tmp_path, capsys):
+    import demseis
+
+    root, _ = field
+    argv = ["--planar", "2", "--planar-steep", "2", "--workers", "0", "--cache",
+            str(tmp_path / "c"), "--field-dir", str(root / "set"), "--seeds", "0",
+            "--steps", "1", "--base", "4", "--crop", "32", "--batch", "2", "--threads", "1",
+            "--device", "cpu", "--max-eval", "2", "--field-scale", "1",
+            "--results", str(tmp_path / "r.json")]
+    assert bench["main"](argv) == 0
+    out = capsys.readouterr()
+    lines = [json.loads(x) for x in out.out.strip().splitlines()]
+    assert [x["model"] for x in lines] == ["planar", "planar_steep"]
+    for line, (lo, hi) in zip(lines, ((1, 3), (3, 10))):
+        # 2 runs hold none out at --test-fraction 0.25: no held-out scores, and no error
+        assert line["synthetic"][line["model"]] == {"n_sections": {
+            "mean": 0.0, "std": 0.0, "min": 0.0, "max": 0.0, "n": 1}}
+        faults = demseis.open(line["stores"][0]).params["planar_faults"]
+        assert lo <= faults.min() and faults.max() <= hi
+    assert bench["main"](argv) == 0
+    assert "building" not in capsys.readouterr().err
