@@ -27,7 +27,7 @@ from demseis.generator.survey import (damage_factor, fill_gaps, fine_depths, hol
                                       reference_points, substeps, to_time, trace_spacing,
                                       trace_x)
 from demseis.labels import pick_faults, sample_facts, throw_samples
-from demseis.labels.offsets import offset_faults, pair_jumps, window_max
+from demseis.labels.offsets import jumps_to_samples, offset_faults, pair_jumps, window_max
 from demseis.schema import SAMPLE_ARRAYS, engine_labels
 from demseis.seismic import (add_noise, coarse_velocity, imaged_sections, imaging_mode,
                              strata_properties)
@@ -195,9 +195,8 @@ def output_picks(cfg: Config, maps: Mapping[str, np.ndarray], vp_m_s: np.ndarray
             maps = offset_faults(dict(maps), jump_m, per_m, trace_spacing(cfg), 1.0 / per_m,
                                  min_samples=max(float(lab.min_throw_samples), 1.0),
                                  min_rows=int(lab.offset_min_rows))
-        pair = np.abs(jump_m[:, :-1]) * 0.5 * (per_m[:, 1:] + per_m[:, :-1])
+        pair = jumps_to_samples(jump_m[:, :-1], per_m, per_m.shape)
         return pick_faults(maps, window_max(pair), lab.picks())
-    t_s = time_axis_of(cfg)
     if t_s is None:
         throw = throw_samples(maps["slip_m"], maps["dip_deg"], cell_m=grid_of(cfg).cell_m)
     else:

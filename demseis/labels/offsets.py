@@ -28,6 +28,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import binary_closing, binary_dilation, label
 
+from demseis.labels.picks import PICKED
+
 
 def pair_jumps(y0_m: np.ndarray, width: int = 3, trend_pairs: int = 4) -> np.ndarray:
     """Signed jump of ``y0_m`` (m) across each pair of neighbouring traces beyond the row's
@@ -68,9 +70,15 @@ def pair_offsets(y0_m: np.ndarray, samples_per_m: np.ndarray | float, width: int
     mean ``samples_per_m`` (scalar or (rows, ntr)) of the pair's two pixels; (rows, ntr - 1),
     NaN where there is no rock (see :func:`pair_jumps`)."""
     y = np.asarray(y0_m, dtype=np.float64)
-    jumps = pair_jumps(y, width, trend_pairs)
-    sc = np.broadcast_to(np.asarray(samples_per_m, dtype=np.float64), y.shape)
-    return np.abs(jumps) * 0.5 * (sc[:, 1:] + sc[:, :-1])
+    return jumps_to_samples(pair_jumps(y, width, trend_pairs), samples_per_m, y.shape)
+
+
+def jumps_to_samples(jumps_m: np.ndarray, samples_per_m: np.ndarray | float,
+                     shape: tuple[int, int]) -> np.ndarray:
+    """``|jumps_m|`` (rows, npair) in output samples: times the mean ``samples_per_m`` (scalar
+    or per pixel, of ``shape`` = (rows, npair + 1)) of each pair's two pixels."""
+    sc = np.broadcast_to(np.asarray(samples_per_m, dtype=np.float64), shape)
+    return np.abs(jumps_m) * 0.5 * (sc[:, 1:] + sc[:, :-1])
 
 
 def _row_nanmedian(a: np.ndarray) -> np.ndarray:
@@ -118,7 +126,8 @@ def offset_faults(maps: dict[str, np.ndarray], jump_m: np.ndarray, samples_per_m
     Parameters
     ----------
     maps : label maps on the output grid (``fault``, ``fault_id``, ``slip_m``, ``dip_deg``,
-        ``sense`` at least), (H, W) each; not modified.
+        ``sense`` at least), (H, W) each; not modified (the returned dict holds new arrays
+        for those five and ``maps``' own arrays for the others).
     jump_m : (H, W) signed :func:`pair_jumps` of the pair (j, j + 1) at column j (the last
         column 0), on the output grid.
     samples_per_m, m_per_row : (H, W) output samples per metre of throw and metres of depth
@@ -133,7 +142,7 @@ def offset_faults(maps: dict[str, np.ndarray], jump_m: np.ndarray, samples_per_m
     if keep_away_px > 0 and fault.any():
         near = binary_dilation(fault, np.ones((2 * keep_away_px + 1,) * 2, dtype=bool))
         ridge &= ~near
-    out = {k: np.array(v, copy=True) for k, v in maps.items()}
+    out = {k: (np.array(v, copy=True) if k in PICKED else v) for k, v in maps.items()}
     if not ridge.any():
         return out
     linked = binary_closing(ridge, np.ones((3, 1), dtype=bool)) | ridge
@@ -145,8 +154,8 @@ def offset_faults(maps: dict[str, np.ndarray], jump_m: np.ndarray, samples_per_m
             pieces.append((rr, cc))
     pieces.sort(key=lambda p: -p[0].size)
     next_id = int(np.asarray(maps["fault_id"]).max()) + 1
+    z = np.cumsum(np.concatenate([[0.0], np.median(m_per_row, axis=1)]))[:-1]  # row depths (m)
     for rr, cc in pieces:
-        z = np.cumsum(np.concatenate([[0.0], np.median(m_per_row, axis=1)]))[:-1]
         zz, xx = z[rr], cc * m_per_trace
         slope = np.polyfit(zz, xx, 1)[0] if np.ptp(zz) > 0 else 0.0     # dx/dz
         dip = float(np.degrees(np.arctan2(1.0, abs(slope))))
@@ -162,4 +171,5 @@ def offset_faults(maps: dict[str, np.ndarray], jump_m: np.ndarray, samples_per_m
     return out
 
 
-__all__ = ["offset_faults", "pair_jumps", "pair_offsets", "pixel_offsets", "window_max"]
+__all__ = ["jumps_to_samples", "offset_faults", "pair_jumps", "pair_offsets", "pixel_offsets",
+           "window_max"]
