@@ -24,7 +24,7 @@ import sys
 import warnings
 from collections.abc import Sequence
 
-from demseis import __version__
+from demseis import __version__, interrupts
 from demseis.errors import DemseisError
 
 
@@ -89,13 +89,22 @@ def _quiet_pending_tasks() -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the process exit code."""
+    # Ctrl-C is recorded as well as raised: one swallowed where it landed (a __del__, a weakref
+    # callback) is raised by the next check of a long loop, or reported below at the latest
+    with interrupts.installed():
+        return _main(argv)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     try:
         parser = build_parser()  # imports the command modules: Ctrl-C may land here too
         args = parser.parse_args(argv)
         if not getattr(args, "func", None):
             parser.print_help()
             return 2
-        return int(args.func(args) or 0)
+        code = int(args.func(args) or 0)
+        interrupts.raise_if_interrupted()
+        return code
     except DemseisError as exc:
         # a store read that failed (a damaged chunk) leaves its sibling reads pending on
         # zarr's event loop: their "Task was destroyed" at exit is noise after the one line
@@ -107,6 +116,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"demseis: error: {where}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        interrupts.clear()
         # an interrupted zarr call leaves a task on zarr's event loop. What was written is
         # consistent (a shard counts only once its done flag is set), so that is noise.
         _quiet_pending_tasks()

@@ -19,6 +19,7 @@ from demseis.datasets import (
     write_shard,
     writer_lock,
 )
+from demseis import interrupts
 from demseis.errors import StoreError
 from demseis.generator.config import Config, stored_config
 from demseis.generator.engines import get_engine, require_particles, run_from_particles
@@ -56,7 +57,7 @@ def rerender_config(source_cfg: dict[str, Any], freqs_hz: list[float], snrs_db: 
 def rerender(source: str | Path, out: str | Path, **options: Any) -> SweepSummary:
     """Write a new store with every done run of ``source`` re-rendered, holding ``out``'s
     writer lock (options: those of :func:`_rerender`)."""
-    with writer_lock(out, "demseis render"):
+    with writer_lock(out, "demseis render"), interrupts.watched():
         return _rerender(source, out, **options)
 
 
@@ -98,7 +99,7 @@ def relabel(source: str | Path, out: str | Path, *, labels: dict[str, Any],
         take their defaults, not the source's values.
     overwrite, progress : as for :func:`rerender`.
     """
-    with writer_lock(out, "demseis relabel"):
+    with writer_lock(out, "demseis relabel"), interrupts.watched():
         src = Path(source)
         root = open_store(src)
         cfg = relabel_config(dict(root.attrs)["config"], labels)
@@ -122,6 +123,7 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
     bar = _progress_bar(len(pending) * cfg.samples_per_run, progress and bool(pending), desc=desc)
     try:
         for run in pending:
+            interrupts.raise_if_interrupted()  # one swallowed where it landed
             if src_status[run] != 1:
                 summary.failed[run] = "not done in the source store"
                 continue

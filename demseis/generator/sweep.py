@@ -37,6 +37,7 @@ from demseis.datasets import (
     writer_lock,
 )
 from demseis.datasets.layout import root_metadata_lost
+from demseis import interrupts
 from demseis.datasets.lock import pid_alive
 from demseis.errors import ConfigError, InputError, SimulationError, StoreError
 from demseis.generator.config import Config, load_config, parse_config
@@ -307,7 +308,7 @@ def run_sweep(cfg: Config, out: str | Path, **options: Any) -> SweepSummary:
     holds the lock, the dask workers write their shards (see demseis.datasets.lock). The
     options are those of :func:`_run_sweep`.
     """
-    with writer_lock(out, "demseis generate"):
+    with writer_lock(out, "demseis generate"), interrupts.watched():
         return _run_sweep(cfg, out, **options)
 
 
@@ -353,6 +354,7 @@ def _run_sweep(
             if workers == 0 and scheduler is None:
                 t_compute = time.perf_counter()
                 for shard in pending:
+                    interrupts.raise_if_interrupted()  # one swallowed where it landed
                     _account(summary, bar, shard_task(str(out), cfg_dict, shard))
                 summary.compute_seconds = time.perf_counter() - t_compute
                 summary.phase_seconds["compute"] = summary.compute_seconds
@@ -449,16 +451,24 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
         queue = iter(enumerate(order))
         window = max(SUBMIT_WINDOW, 4 * len(client.scheduler_info().get("workers", {})))
         running = as_completed([submit(rank, s) for rank, s in itertools.islice(queue, window)])
-        for fut in running:
-            if fut.status == "finished":
-                _account(summary, bar, fut.result())
-            else:
-                exc = fut.exception()
-                summary.failed[shard_of[fut.key]] = f"{type(exc).__name__}: {exc}"
-            shard_of.pop(fut.key, None)
-            nxt = next(queue, None)
-            if nxt is not None:
-                running.add(submit(*nxt))
+        while not running.is_empty():
+            # a Ctrl-C swallowed where it landed (a __del__, a weakref callback) is raised here:
+            # polled every 0.1 s, not only when a task finishes (a DEM run takes minutes)
+            interrupts.raise_if_interrupted()
+            batch = running.next_batch(block=False)
+            if not batch:
+                time.sleep(0.1)
+                continue
+            for fut in batch:
+                if fut.status == "finished":
+                    _account(summary, bar, fut.result())
+                else:
+                    exc = fut.exception()
+                    summary.failed[shard_of[fut.key]] = f"{type(exc).__name__}: {exc}"
+                shard_of.pop(fut.key, None)
+                nxt = next(queue, None)
+                if nxt is not None:
+                    running.add(submit(*nxt))
         summary.compute_seconds = time.perf_counter() - t_compute
         summary.phase_seconds["compute"] = summary.compute_seconds
     except BaseException:
