@@ -1,7 +1,7 @@
 """The import graph of the package runs one way, has no cycles, and nothing imports ``tests``.
 
 cli -> plotting / api -> generator -> evaluation -> datasets -> dem | seismic | labels
--> types / parameters / schema -> registry -> errors. A stage (dem, seismic, labels) never
+-> types / parameters / schema -> registry -> errors | interrupts (standard library only). A stage (dem, seismic, labels) never
 imports ``datasets`` and reaches another stage only through its package (``from demseis.seismic
 import rasterise``), never its modules. ``diagnostics`` (benchmarks, calibration, measures, toy
 inputs) may import any of these but no product module imports it: only the handlers of
@@ -21,7 +21,7 @@ STAGES = ("dem", "seismic", "labels")
 #: rank of each top-level part of the package: a module may import only parts of lower or equal
 #: rank (equal only within the same part)
 RANK = {
-    "errors": 0,
+    "errors": 0, "interrupts": 0,
     "registry": 1,
     "types": 2, "parameters": 2, "schema": 2,
     "dem": 3, "seismic": 3, "labels": 3,
