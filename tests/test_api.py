@@ -30,7 +30,7 @@ def test_generate_on_a_complete_store_resumes_nothing(tiny_store):
     again = demseis.generate("tiny", out=tiny_store, workers=0)
     assert isinstance(again, demseis.Store) and again.path == tiny_store
     assert not again.run_summary.failed and again.done.all()
-    assert again.run_summary.completed == [] or not again.run_summary.completed  # nothing to do
+    assert again.run_summary.completed == [] and again.run_summary.done_before == 3  # runs
     assert again.run_summary.done_before == 3
 
 

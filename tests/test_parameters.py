@@ -22,7 +22,9 @@ def _dem_material(name, value):
     from demseis.dem.engine import validate_material
 
     field = {v: k for k, v in MATERIAL_FIELDS.items()}[name]
-    validate_material(Material(**{field: value}))
+    material = Material(**{field: value})
+    validate_material(material)
+    return getattr(material, field)
 
 
 def _dem_fault(field):
@@ -30,7 +32,9 @@ def _dem_fault(field):
         from demseis.dem import NormalFault
         from demseis.dem.fault import validate_fault
 
-        validate_fault(NormalFault(**{field: value}), 5000.0)
+        fault = NormalFault(**{field: value})
+        validate_fault(fault, 5000.0)
+        return getattr(fault, field)
     return check
 
 
@@ -38,24 +42,31 @@ def _dem_stretch(name, value):
     from demseis.dem.fault import validate_stretch
 
     validate_stretch(value)
+    return value
 
 
 def _property_model(name, value):
     from demseis.seismic import PropertyModel
 
-    PropertyModel(**{name: value}).validate()
+    return getattr(PropertyModel(**{name: value}).validate(), name)
 
 
 def _wavelet(name, value):
     from demseis.seismic import ricker
 
-    assert ricker(value, 0.0005, 2.5).size > 0
+    dt = min(0.0005, 0.02 / value)   # 50 samples a period: sampling does not move the peak
+    w = ricker(value, dt, 2.5)
+    spectrum = np.abs(np.fft.rfft(w, 2 ** 22))   # the Ricker spectrum peaks at its frequency
+    return float(np.fft.rfftfreq(2 ** 22, dt)[np.argmax(spectrum)])
 
 
 def _noise(name, value):
     from demseis.seismic import add_noise
 
-    add_noise(np.sin(np.arange(200.0)).reshape(10, 20), value, "white", np.random.default_rng(0))
+    x = np.sin(np.arange(200.0)).reshape(10, 20)
+    noise = add_noise(x, value, "white", np.random.default_rng(0)) - x
+    rms = np.sqrt(np.mean(noise ** 2))
+    return math.inf if rms == 0 else 20 * math.log10(np.sqrt(np.mean(x ** 2)) / rms)
 
 
 def _psf(name, value):
@@ -65,6 +76,7 @@ def _psf(name, value):
     kw = {"max_angle_deg": value} if name == "psf_max_angle_deg" else {
         "aperture_m": value if value > 0 else math.inf}        # the sweep's 0 = no limit
     assert psf_sections(vp, vp * 0.8, 10.0, 40.0, **kw).shape == (1, 12, 10)
+    return value
 
 
 def _bed_model(name, value):
@@ -77,16 +89,17 @@ def _bed_model(name, value):
                                       "bed_thickness_min_m": min(0.5, value)},
               "bed_thickness_median_m": {"bed_thickness_min_m": min(0.5, value),
                                          "bed_thickness_max_m": max(40.0, value)}}
-    BedModel(**{name: value, **others.get(name, {})}).validate()
+    return getattr(BedModel(**{name: value, **others.get(name, {})}).validate(), name)
 
 
 def _grid(name, value):
     from demseis.types import Grid
 
-    Grid(x0_m=0.0, top_m=0.0, cell_m=value, nz=2, nx=2)
+    return Grid(x0_m=0.0, top_m=0.0, cell_m=value, nz=2, nx=2).cell_m
 
 
-#: the stage check that consumes each numeric parameter
+#: the stage check that consumes each numeric parameter; each returns the value as the stage
+#: holds it (a field of what it built) or as its output shows it
 STAGE = {
     **{name: _dem_material for name in MATERIAL_FIELDS.values() if PARAMS[name].kind is float},
     "dip_deg": _dem_fault("dip_deg"),
@@ -149,7 +162,11 @@ def test_stage_accepts_the_declared_bounds(name):
     for bound in (p.lo, p.hi):
         if bound is None or (bound == math.inf and name != "snr_db"):
             continue
-        STAGE[name](name, _inside(p, bound))  # raises if the stage refuses
+        value = _inside(p, bound)
+        # accepted (a refusal raises) and used: what the stage built holds, or its output
+        # shows, the value (a Ricker's spectral peak, the noise's measured SNR)
+        got = STAGE[name](name, value)
+        assert got == pytest.approx(value, rel=1e-3), (name, value, got)
 
 
 @pytest.mark.parametrize("name", NUMERIC)

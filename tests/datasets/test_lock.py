@@ -83,8 +83,9 @@ def test_reused_pid_counts_as_stale(tmp_path):
     store = tmp_path / "t.zarr"
     lock_path(store).write_text(json.dumps({"host": socket.gethostname(), "pid": os.getppid(),
                                             "proc_start": "1", "token": "old"}))
-    with writer_lock(store):
-        pass
+    with writer_lock(store) as lock:
+        holder = json.loads(lock.path.read_text())
+        assert holder["token"] != "old" and holder["pid"] == os.getpid()
 
 
 def test_lock_of_another_host_is_never_taken_over(tmp_path):

@@ -4,6 +4,7 @@ the fault population it grows in brittle cover, shortening, combinations and bad
 from __future__ import annotations
 
 import hashlib
+import os
 
 import numpy as np
 import pytest
@@ -216,15 +217,33 @@ def test_no_gap_opens_in_a_run(engines, stretch):
     assert engines[-1].walls.shape == walls0.shape
 
 
+def stretch_digest() -> str:
+    """SHA-256 of the snapshots of one small stretched brittle run (fixed seeds)."""
+    asm = build_assembly(600.0, 300.0, radius_min_m=10.0, radius_max_m=20.0, n_layers=4, rng=1)
+    snaps = simulate(asm, NONE, Material(model="brittle", cohesion_n=6e8), n_snapshots=2,
+                     rng=2, base_stretch=0.15)
+    return hashlib.sha256(b"".join(s.xy.tobytes() + s.ids.tobytes() for s in snaps)).hexdigest()
+
+
 def test_same_seed_same_bytes():
-    def digest():
-        asm = build_assembly(600.0, 300.0, radius_min_m=10.0, radius_max_m=20.0, n_layers=4,
-                             rng=1)
-        snaps = simulate(asm, NONE, Material(model="brittle", cohesion_n=6e8), n_snapshots=2,
-                         rng=2, base_stretch=0.15)
-        return hashlib.sha256(b"".join(s.xy.tobytes() + s.ids.tobytes()
-                                       for s in snaps)).hexdigest()
-    assert digest() == digest()
+    """The same run in this process and in a fresh one (its own hash seed, its own Numba
+    state) gives the same bytes; another packing seed gives others."""
+    import subprocess
+    import sys
+
+    from tests._helpers import ROOT
+
+    here = stretch_digest()
+    there = subprocess.run([sys.executable, "-c", "from tests.dem.test_stretch import "
+                            "stretch_digest; print(stretch_digest())"], cwd=ROOT, check=True,
+                           capture_output=True, text=True, env={**os.environ,
+                                                                "PYTHONHASHSEED": "123"})
+    assert there.stdout.strip() == here
+    asm = build_assembly(600.0, 300.0, radius_min_m=10.0, radius_max_m=20.0, n_layers=4, rng=3)
+    other = simulate(asm, NONE, Material(model="brittle", cohesion_n=6e8), n_snapshots=2,
+                     rng=2, base_stretch=0.15)
+    assert hashlib.sha256(b"".join(s.xy.tobytes() + s.ids.tobytes()
+                                   for s in other)).hexdigest() != here
 
 
 def test_bad_input_is_refused():

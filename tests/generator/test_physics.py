@@ -9,17 +9,23 @@ import pytest
 
 from demseis.errors import ConfigError
 from demseis.generator.config import load_config, parse_config
-from demseis.generator.physics import MAX_WALL_MACH, p_wave_speed_m_s
+from demseis.generator.params import spec_values_hint
+from demseis.generator.physics import MAX_WALL_MACH, check_physics, p_wave_speed_m_s
 from tests.generator._helpers import generate_tiny
 
 
-@pytest.mark.parametrize("preset", ["tiny", "quick", "seed"])
+@pytest.mark.parametrize("preset", ["tiny", "quick", "seed", "field"])
 def test_presets_pass(preset):
-    load_config(preset=preset)
+    """The shipped presets load (the physics rules run at load) and pass the rules again when
+    checked directly."""
+    cfg = load_config(preset=preset)
+    assert cfg.name == preset
+    assert check_physics(cfg) is None
 
 
 def test_examples_pass():
-    load_config("examples/readme.toml")
+    cfg = load_config("examples/readme.toml")
+    assert check_physics(cfg) is None and cfg.sweep.n_runs >= 1
 
 
 @pytest.mark.parametrize("raw, words", [
@@ -59,7 +65,9 @@ def test_degenerate_mechanics_refused_by_the_range(raw, key):
 def test_weakest_declared_material_is_accepted():
     """Cohesion 0 with the lowest declared friction (0.2; a frictionless, cohesionless pack
     flows like a fluid, docs/dem.md) is accepted."""
-    parse_config({"sweep": {"cohesion_n": 0.0, "friction": 0.2}})
+    cfg = parse_config({"sweep": {"cohesion_n": 0.0, "friction": 0.2}})
+    assert spec_values_hint(cfg.sweep.params["cohesion_n"]) == (0.0, 0.0)
+    assert spec_values_hint(cfg.sweep.params["friction"]) == (0.2, 0.2)
 
 
 def test_wall_speed_bound_is_the_p_wave_fraction():
@@ -90,9 +98,16 @@ def test_run_without_fault_is_recorded(tmp_path, capsys):
 def test_a_long_stretch_makes_a_short_throw_quasi_static():
     """A run lasts the longer of its slip and its base stretch: 1 m of throw passes with a
     0.1 stretch, and so does a run without basement fault whose stretch lasts long enough."""
-    parse_config({"sweep": {"throw_m": 1.0, "dip_deg": 45.0, "base_stretch": 0.1}})
-    parse_config({"sweep": {"structure": "none", "base_stretch": -0.05}})
-    parse_config({"sweep": {"structure": "none", "base_stretch": [0.1, -0.1]}})
+    for raw in ({"throw_m": 1.0, "dip_deg": 45.0, "base_stretch": 0.1},
+                {"structure": "none", "base_stretch": -0.05},
+                {"structure": "none", "base_stretch": [0.1, -0.1]}):
+        cfg = parse_config({"sweep": raw})
+        assert check_physics(cfg) is None
+        lo, hi = spec_values_hint(cfg.sweep.params["base_stretch"])
+        assert (lo, hi) == (min(np.ravel(raw["base_stretch"])), max(np.ravel(raw["base_stretch"])))
+    # the same 1 m of throw without the long stretch is dynamic
+    with pytest.raises(ConfigError, match="dynamic"):
+        parse_config({"sweep": {"throw_m": 1.0, "dip_deg": 45.0}})
     with pytest.raises(ConfigError, match="dynamic"):   # a range through 0 draws near-0 runs
         parse_config({"sweep": {"structure": "none",
                                 "base_stretch": {"dist": "uniform", "low": -0.1, "high": 0.1}}})
