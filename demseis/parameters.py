@@ -28,7 +28,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from demseis.errors import ConfigError, DemseisError
+from demseis.errors import ConfigError, DemseisError, InputError
 from demseis.registry import ENGINES, IMAGING, Registry
 
 INF = math.inf
@@ -125,7 +125,10 @@ class Param:
 
         Integers are accepted for floats, ``"inf"`` for a float whose range admits inf.
         """
-        coerced, ok = self._coerce(value)
+        try:
+            coerced, ok = self._coerce(value)
+        except InputError as exc:  # a "module:attribute" choice that does not import
+            raise error(f"{where} = {value!r} is not allowed: {exc}") from None
         if not ok:
             raise error(f"{where} = {value!r} is not allowed: expected {self.allowed()}")
         return coerced

@@ -95,7 +95,8 @@ class SampleArray:
 
 
 #: every per-sample array, in store order (a store holds them in this order)
-SAMPLE_ARRAYS: Registry[SampleArray] = Registry("sample array")
+SAMPLE_ARRAYS: Registry[SampleArray] = Registry("sample array", group="demseis.arrays",
+                                                paths=False)
 
 for _a in (
     SampleArray("seismic", "float32", "input", "1", "seismic amplitude (band-limited, with noise)",

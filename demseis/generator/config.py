@@ -31,7 +31,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from demseis.errors import ConfigError
+from demseis.errors import ConfigError, InputError
 from demseis.generator.params import (
     DistSpec,
     Fixed,
@@ -42,7 +42,7 @@ from demseis.generator.params import (
 )
 from demseis.labels import LabelConfig
 from demseis.parameters import BED_FIELDS, PARAMS, PROPERTY_FIELDS, SCENARIO, Param
-from demseis.registry import ENGINES
+from demseis.registry import ENGINES, load_plugins
 from demseis.seismic import BedModel, PropertyModel
 
 PRESETS = ("tiny", "quick", "seed", "variety", "field", "planar")
@@ -109,6 +109,8 @@ class Config:
     output: OutputSection
     labels: Any
     properties: dict[str, Any]
+    #: plug-in modules imported before the config is read (demseis.registry.load_plugins)
+    plugins: tuple[str, ...] = ()
 
     # ---- derived sizes -------------------------------------------------------------
     def render_grid(self) -> list[dict[str, Any]]:
@@ -144,6 +146,8 @@ class Config:
             "labels": dataclasses.asdict(self.labels),
             "properties": {k: list(v) if isinstance(v, tuple) else v
                            for k, v in self.properties.items()},
+            # only when set: a config without plug-ins keeps the dict (and store) it had
+            **({"plugins": list(self.plugins)} if self.plugins else {}),
         }
 
 
@@ -223,6 +227,19 @@ def _coerce_like(default: Any, value: Any, where: str) -> Any:
     return value
 
 
+def _load_plugins(value: Any) -> tuple[str, ...]:
+    """Import the ``plugins`` modules (in this process: each sweep worker parses the config
+    too); ConfigError naming the one that fails."""
+    if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+        raise ConfigError(f"plugins = {value!r}: expected a list of module names "
+                          "(\"package.module\")")
+    try:
+        load_plugins(value)
+    except InputError as exc:
+        raise ConfigError(str(exc)) from None
+    return tuple(value)
+
+
 def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
     """Validate a config dict (from TOML, a preset or a store) into a :class:`Config`.
 
@@ -230,10 +247,11 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
     """
     if not isinstance(raw, dict):
         raise ConfigError(f"{source}: expected a table at the top level")
-    allowed_top = {"name", "sweep", "model", "grid", "labels", "output", "properties"}
+    allowed_top = {"name", "sweep", "model", "grid", "labels", "output", "properties", "plugins"}
     for key in raw:
         if key not in allowed_top:
             raise ConfigError(f"{key}: unknown top-level key; allowed are " + ", ".join(sorted(allowed_top)))
+    plugins = _load_plugins(raw.get("plugins", []))  # first: they may add engines, modes, arrays
     name = raw.get("name", "demseis")
     if not isinstance(name, str) or not name:
         raise ConfigError(f"name = {name!r}: expected a non-empty string")
@@ -287,7 +305,7 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
         properties.setdefault(key, getattr(prop_defaults, key))
 
     cfg = Config(name=name, sweep=sweep, model=model, grid=grid, output=output, labels=labels,
-                 properties=properties)
+                 properties=properties, plugins=plugins)
     _cross_checks(cfg)
     return cfg
 

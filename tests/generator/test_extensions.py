@@ -4,7 +4,6 @@ label array, each registered here (no package file names them), go through ``gen
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -16,70 +15,18 @@ import demseis
 from demseis.datasets import FaultSegDataset, validate_store
 from demseis.errors import ConfigError
 from demseis.generator.config import load_config, parse_config
-from demseis.generator.engines import Engine, EngineRun, State, get_engine
-from demseis.generator.layout import grid_of
+from demseis.generator.engines import Engine, State, get_engine
 from demseis.generator.rerender import rerender
-from demseis.generator.runsetup import run_info, run_strata
 from demseis.registry import ENGINES, IMAGING
-from demseis.schema import (SAMPLE_ARRAYS, SampleArray, engine_labels, register_array,
-                            sample_array, stored_arrays)
-from demseis.seismic import ImagingMode, LayerProperties, synthetic_sections
+from demseis.schema import SAMPLE_ARRAYS, SampleArray, register_array, stored_arrays
+from demseis.seismic import ImagingMode, synthetic_sections
+from tests.generator._flat import FlatEngine
 
 
 def tiny(**model: Any) -> dict[str, Any]:
     raw = load_config(preset="tiny").to_dict()
     raw["model"].update(model)
     return raw
-
-
-class FlatEngine:
-    """No faulting: horizontal beds of alternating rock, the same at every snapshot."""
-
-    particles = False
-    strata = True
-
-    def __init__(self) -> None:
-        self.simulated: list[int] = []
-
-    def check(self, cfg) -> None:
-        if cfg.model.width_m < 500:
-            raise ConfigError("flat engine: model.width_m must be >= 500")
-
-    def cost(self, cfg, params: Mapping[str, Any]) -> float:
-        return 1.0
-
-    def describe(self, cfg) -> tuple[str, float]:
-        return "flat beds", 0.01
-
-    def simulate(self, cfg, spec, progress=None) -> EngineRun:
-        self.simulated.append(spec.run)
-        return EngineRun(spec=spec, info=run_info(cfg, spec.params, spec.run))
-
-    def states(self, cfg, run: EngineRun, snapshots: Sequence[int]) -> Iterator[State]:
-        grid = grid_of(cfg)
-        rows = np.arange(grid.nz)[:, None] * np.ones((1, grid.nx))
-        bed = (rows // 5).astype(np.int16)
-        vp = np.where(bed % 2 == 0, 2500.0, 3200.0)
-        rho = np.full(grid.shape, 2300.0)
-        # the strata rendering: the same beds as mechanical units (50 m each, bottom first),
-        # and rock that never moved (reference coordinates = present ones)
-        n = grid.nz // 5
-        top = grid.top_m - 5 * grid.cell_m * np.arange(n)          # unit tops, top first
-        props = LayerProperties(lithology=np.zeros(n, np.int16),
-                                vp=np.where(np.arange(n)[::-1] % 2 == 0, 2500.0, 3200.0),
-                                rho=np.full(n, 2300.0))
-        strata = run_strata(cfg, run.spec.params, run.spec.run, top[::-1] - 5 * grid.cell_m,
-                            top[::-1], props)
-
-        def unmoved(x_m, depth_m):
-            return x_m, grid.top_m - depth_m, np.full(np.shape(x_m), -1)
-
-        for k in snapshots:
-            labels = {n: np.zeros(grid.shape, sample_array(n).dtype) for n in engine_labels()}
-            labels["layer"] = bed
-            yield State(snapshot=k, vp_m_s=vp, rho_kg_m3=rho, labels=labels,
-                        values={"step": k, "throw_m": 0.0, "n_elements": 0},
-                        reference=unmoved, strata=strata)
 
 
 @pytest.fixture
@@ -197,3 +144,43 @@ def test_a_registered_label_array_goes_from_generate_to_the_dataset(tmp_path):
     assert "fault_wide" not in stored_arrays()
     with pytest.raises(demseis.DemseisError, match="producer"):
         register_array(SampleArray("orphan", "uint8", "label", "1", "no producer"))
+
+
+@pytest.mark.slow
+def test_a_plugin_named_in_the_config_reaches_the_dask_workers(tmp_path):
+    """issue 36: a user's module named in the config (``plugins``, and an engine given as
+    ``"module:attribute"``) is imported by every dask worker (2 workers, so no run is made in
+    the driver): the runs use the toy engine and store the toy label array."""
+    import subprocess
+    import sys
+
+    from tests._helpers import ROOT
+
+    cfg = tmp_path / "p.toml"
+    cfg.write_text('plugins = ["tests.generator._plugin"]\n[sweep]\nn_runs = 4\n'
+                   '[model]\nengine = "tests.generator._plugin:FLAT"\n')
+    out = tmp_path / "p.zarr"
+    run = subprocess.run([sys.executable, "-m", "demseis", "generate", str(cfg), "--preset",
+                          "tiny", "--out", str(out), "--workers", "2", "--quiet"], cwd=ROOT,
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
+    root = zarr.open_group(str(out), mode="r")
+    assert root["shard_done"][:].all()
+    layer, parity = root["layer"][:], root["layer_parity"][:]
+    # the flat engine's beds (5 cells each) and the plug-in's label made from them
+    assert np.array_equal(layer[:, :, 0], np.broadcast_to(np.arange(layer.shape[1]) // 5,
+                                                          layer.shape[:2]))
+    np.testing.assert_array_equal(parity, ((layer >= 0) & (layer % 2 == 1)).astype(np.uint8))
+    assert "layer_parity" not in SAMPLE_ARRAYS       # this process never imported the plug-in
+    assert root.attrs["config"]["plugins"] == ["tests.generator._plugin"]
+
+
+def test_a_module_attribute_engine_and_bad_plugins_are_config_errors():
+    with pytest.raises(ConfigError, match=r"model\.engine.*cannot import 'nonesuch_mod'"):
+        parse_config(tiny(engine="nonesuch_mod:ENGINE"))
+    with pytest.raises(ConfigError, match=r"model\.engine.*has no 'NOPE'"):
+        parse_config(tiny(engine="tests.generator._flat:NOPE"))
+    with pytest.raises(ConfigError, match="plugins.*cannot import 'nonesuch_mod'"):
+        parse_config({**tiny(), "plugins": ["nonesuch_mod"]})
+    with pytest.raises(ConfigError, match="expected a list of module names"):
+        parse_config({**tiny(), "plugins": "tests.generator._flat"})
