@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from demseis.errors import ConfigError, DemseisError, InputError
-from demseis.registry import ENGINES, IMAGING, Registry
+from demseis.registry import ENGINES, IMAGING, RENDERINGS, Registry
 
 INF = math.inf
 LEVELS = ("sweep", "run", "sample")
@@ -386,7 +386,7 @@ _DECLARED: tuple[Param, ...] = (
     _p("trace_spacing_m", float, "sweep", 0.0, 0.0, 1000.0, unit="m", section="output",
        doc="distance between the output traces (columns), independent of the model and its "
            "elements, as a survey's trace spacing (12.5-25 m); 0 = the grid cell (grid.cell_m)"),
-    _p("rendering", str, "sweep", "strata", choices=("elements", "strata"), section="output",
+    _p("rendering", str, "sweep", "strata", choices=RENDERINGS, section="output",
        doc="elements: rock properties per DEM element, rasterised on the grid (the paper's "
            "mode); strata: a fine stratigraphy (beds below 1 m to tens of metres) looked up at "
            "each point's reference coordinates (demseis.generator.survey, docs/seismic.md)"),

@@ -10,9 +10,11 @@ time (a plug-in, a test's toy engine) is a valid config value at once.
 Plug-ins reach every process of a sweep (its dask workers re-read the config) in three ways:
 
 - an installed distribution's entry points in the registry's group (``demseis.engines``,
-  ``demseis.imaging``, ``demseis.arrays``), read on first use in each process;
+  ``demseis.imaging``, ``demseis.arrays``, ``demseis.renderings``, ``demseis.fault_styles``,
+  ``demseis.label_methods``), read on first use in each process;
 - a ``"module:attribute"`` name used where a registered name is expected (``[model] engine =
-  "mypkg.engines:FLAT"``): it is imported and registered under that name on first use;
+  "mypkg.engines:FLAT"``, ``[output] rendering``, ``[labels] fault_style`` and ``method``): it
+  is imported and registered under that name on first use;
 - the config's top-level ``plugins = ["mypkg.labels"]``: modules imported (by
   :func:`load_plugins`) before the rest of the config is read, which register what they
   define when imported.
@@ -209,3 +211,24 @@ IMAGING: Registry[Any] = Registry("imaging mode", {
     "1d": "demseis.seismic.imaging:ONE_D",
     "psf": "demseis.seismic.imaging:PSF",
 }, group="demseis.imaging")
+
+#: how a state becomes the property columns the imaging reads (demseis.generator.render:
+#: ``Rendering``); the ``[output] rendering`` values
+RENDERINGS: Registry[Any] = Registry("rendering", {
+    "elements": "demseis.generator.render:ELEMENTS",
+    "strata": "demseis.generator.render:STRATA",
+}, group="demseis.renderings")
+
+#: how the stored fault label is drawn on the output grid (demseis.generator.render:
+#: ``FaultStyle``); the ``[labels] fault_style`` values
+FAULT_STYLES: Registry[Any] = Registry("fault style", {
+    "picks": "demseis.generator.render:PICKS",
+    "traces": "demseis.generator.render:TRACES",
+}, group="demseis.fault_styles")
+
+#: how the fault targets are found in a snapshot's elements (demseis.labels.maps:
+#: ``LabelMethod``); the ``[labels] method`` values
+LABEL_METHODS: Registry[Any] = Registry("label method", {
+    "slip_trace": "demseis.labels.maps:SLIP_TRACE",
+    "strain_band": "demseis.labels.maps:STRAIN_BAND",
+}, group="demseis.label_methods")

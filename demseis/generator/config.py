@@ -42,7 +42,7 @@ from demseis.generator.params import (
 )
 from demseis.labels import LabelConfig
 from demseis.parameters import BED_FIELDS, PARAMS, PROPERTY_FIELDS, SCENARIO, Param
-from demseis.registry import ENGINES, load_plugins
+from demseis.registry import ENGINES, RENDERINGS, load_plugins
 from demseis.seismic import BedModel, PropertyModel
 
 PRESETS = ("tiny", "quick", "seed", "variety", "field", "planar")
@@ -371,13 +371,15 @@ def _cross_checks(cfg: Config) -> None:
                 raise ConfigError(str(exc).replace("strata.", "sweep.")) from None
     # the engine's own rules (the DEM's: elements fit, a fault can form, quasi-static)
     engine = ENGINES.get(cfg.model.engine)
-    if cfg.output.rendering == "strata" and not getattr(engine, "strata", False):
-        raise ConfigError(f"output.rendering = 'strata' needs an engine whose states carry a "
-                          f"reference map and stratigraphy, and engine {cfg.model.engine!r} "
-                          "has none: set [output] rendering = 'elements'")
-    if cfg.labels.throw_from == "offset" and cfg.output.rendering != "strata":
+    rendering = RENDERINGS.get(cfg.output.rendering)
+    if rendering.reference and not getattr(engine, "strata", False):
+        raise ConfigError(f"output.rendering = {cfg.output.rendering!r} needs an engine whose "
+                          f"states carry a reference map and stratigraphy, and engine "
+                          f"{cfg.model.engine!r} has none: set [output] rendering = 'elements'")
+    if cfg.labels.throw_from == "offset" and not rendering.reference:
         raise ConfigError("labels.throw_from = 'offset' measures the reflectors' offsets on the "
-                          "strata rendering's reference map: set [output] rendering = 'strata' "
+                          "reference map, which output.rendering = "
+                          f"{cfg.output.rendering!r} has not: set [output] rendering = 'strata' "
                           "or labels.throw_from = 'slip'")
     engine.check(cfg)
 

@@ -9,7 +9,7 @@ parameter arrays. Which arrays, their dtypes and fills come from :mod:`demseis.s
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,6 +28,7 @@ from demseis.generator.survey import (damage_factor, fill_gaps, fine_depths, hol
                                       trace_x)
 from demseis.labels import pick_faults, sample_facts, throw_samples
 from demseis.labels.offsets import jumps_to_samples, offset_faults, pair_jumps, window_max
+from demseis.registry import FAULT_STYLES, RENDERINGS
 from demseis.schema import SAMPLE_ARRAYS, engine_labels
 from demseis.seismic import (add_noise, coarse_velocity, imaged_sections, imaging_mode,
                              strata_properties)
@@ -116,8 +117,9 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
         images.update({(key, f): sec for f, sec in zip(freqs, secs)})
     impedance = img.impedance
     vp = img.vp_cell
+    style: FaultStyle = FAULT_STYLES.get(cfg.labels.fault_style)
     extra = {}
-    if cfg.labels.fault_style == "picks" and cfg.labels.throw_from == "offset":
+    if style.offsets and cfg.labels.throw_from == "offset":
         extra[_JUMP] = cell_jumps(cfg, img)
     if t_s is not None:
         fills = {name: SAMPLE_ARRAYS.get(name).fill for name in [*maps, "impedance"]}
@@ -127,8 +129,7 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
     else:
         maps = {**maps, **extra}
     jump = maps.pop(_JUMP, None)
-    if cfg.labels.fault_style == "picks":
-        maps = output_picks(cfg, maps, vp, jump)
+    maps = style.draw(cfg, maps, vp, jump)
     facts = sample_facts(maps)
     rendered = {"impedance": impedance}
     codes = param_codes()
@@ -233,23 +234,36 @@ class ImagingInput:
 
 def imaging_input(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
                   params: Mapping[str, Any]) -> ImagingInput:
-    """The property columns of ``state`` at the traces, by the sweep's ``rendering``
-    (:mod:`demseis.generator.survey`); ``maps`` are its labels at the traces, ``params`` the
-    run's parameters.
+    """The property columns of ``state`` at the traces, by the sweep's ``[output] rendering``
+    (:data:`demseis.registry.RENDERINGS`); ``maps`` are its labels at the traces, ``params`` the
+    run's parameters."""
+    rendering: Rendering = RENDERINGS.get(cfg.output.rendering)
+    return rendering.columns(cfg, state, maps, params)
+
+
+def _element_columns(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
+                     params: Mapping[str, Any]) -> ImagingInput:
+    """``elements``: the engine's property grids, at the nearest grid column of each trace."""
+    grid = grid_of(cfg)
+    vp, rho = state.vp_m_s, state.rho_kg_m3
+    col_step = None
+    if not on_grid(cfg):
+        cols = nearest_columns(cfg)
+        vp, rho, col_step = vp[:, cols], rho[:, cols], trace_spacing(cfg)
+    return ImagingInput(vp, rho, grid.cell_m, col_step, 1, vp, vp * rho)
+
+
+def _strata_columns(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
+                    params: Mapping[str, Any]) -> ImagingInput:
+    """``strata``: a fine stratigraphy looked up through the state's reference map
+    (:mod:`demseis.generator.survey`).
 
     Raises
     ------
     InputError
-        ``rendering = "strata"`` and the engine's state has no reference map or stratigraphy.
+        The engine's state has no reference map or stratigraphy.
     """
     grid = grid_of(cfg)
-    if cfg.output.rendering == "elements":
-        vp, rho = state.vp_m_s, state.rho_kg_m3
-        col_step = None
-        if not on_grid(cfg):
-            cols = nearest_columns(cfg)
-            vp, rho, col_step = vp[:, cols], rho[:, cols], trace_spacing(cfg)
-        return ImagingInput(vp, rho, grid.cell_m, col_step, 1, vp, vp * rho)
     if state.reference is None or state.strata is None:
         raise InputError(f"[output] rendering = 'strata' needs the engine's reference map and "
                          f"stratigraphy, and engine {cfg.model.engine!r} gives none (snapshot "
@@ -282,3 +296,61 @@ def imaging_input(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
 def _imaging_key(r: Render) -> tuple:
     """Renders sharing this key share one imaging call."""
     return (r.imaging, *imaging_mode(r.imaging).key_of(r.values))
+
+
+@dataclass(frozen=True)
+class Rendering:
+    """One ``[output] rendering`` (an entry of :data:`demseis.registry.RENDERINGS`).
+
+    Attributes
+    ----------
+    columns : ``columns(cfg, state, maps, params) -> ImagingInput``: the property columns
+        at the traces (``maps``: the state's labels at the traces; ``params``: the run's).
+    reference : it reads the state's ``reference`` map and ``strata`` (an engine must declare
+        ``strata = True``; engines compute them only for such a rendering), and it gives
+        ``ImagingInput.y0_cell`` (what ``[labels] throw_from = "offset"`` measures).
+    """
+
+    columns: Callable[[Config, State, Mapping[str, np.ndarray], Mapping[str, Any]],
+                      ImagingInput]
+    reference: bool = False
+
+
+#: the engine's property grids (the paper's mode)
+ELEMENTS = Rendering(_element_columns)
+#: a fine stratigraphy through the reference map (the default)
+STRATA = Rendering(_strata_columns, reference=True)
+
+
+def rendering_of(cfg: Config) -> Rendering:
+    """The :class:`Rendering` that ``cfg``'s ``[output] rendering`` names."""
+    return RENDERINGS.get(cfg.output.rendering)
+
+
+@dataclass(frozen=True)
+class FaultStyle:
+    """One ``[labels] fault_style`` (an entry of :data:`demseis.registry.FAULT_STYLES`).
+
+    Attributes
+    ----------
+    draw : ``draw(cfg, maps, vp_m_s, jump_m) -> maps``: the labels on the output grid with
+        their fault drawn in this style (``vp_m_s``: interval velocity on that grid;
+        ``jump_m``: the reflectors' jumps, :func:`cell_jumps`, or None).
+    offsets : it uses ``jump_m`` where ``[labels] throw_from = "offset"`` (they are computed
+        only then).
+    """
+
+    draw: Callable[[Config, dict[str, np.ndarray], np.ndarray, np.ndarray | None],
+                   dict[str, np.ndarray]]
+    offsets: bool = False
+
+
+def _as_traced(cfg: Config, maps: dict[str, np.ndarray], vp_m_s: np.ndarray,
+               jump_m: np.ndarray | None) -> dict[str, np.ndarray]:
+    return maps
+
+
+#: the label method's traces as they are
+TRACES = FaultStyle(_as_traced)
+#: faults drawn as an interpreter picks them (:func:`output_picks`; the default)
+PICKS = FaultStyle(output_picks, offsets=True)

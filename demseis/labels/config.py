@@ -7,13 +7,12 @@ import numbers
 from dataclasses import dataclass, fields
 from typing import Any
 
-from demseis.errors import ConfigError
+from demseis.errors import ConfigError, InputError
 from demseis.labels.picks import PickConfig
+from demseis.registry import FAULT_STYLES, LABEL_METHODS, Registry
 
 STRAIN_MEASURES = ("total", "cumulative")
 NEIGHBOUR_METHODS = ("radius", "knn")
-FAULT_METHODS = ("slip_trace", "strain_band")
-FAULT_STYLES = ("picks", "traces")
 THROW_SOURCES = ("slip", "offset")
 
 
@@ -171,7 +170,7 @@ class LabelConfig:
         _number("smooth_sigma_cells", self.smooth_sigma_cells, 0.0, 20.0)
         _number("thickness_cells", self.thickness_cells, 0.0, 50.0)
         _integer("centreline_window_cells", self.centreline_window_cells, 1, 201)
-        _choice("method", self.method, FAULT_METHODS)
+        _choice("method", self.method, LABEL_METHODS)
         if self.min_slip_m is not None:
             _number("min_slip_m", self.min_slip_m, 0.0, 1e4, lo_open=True)
         _number("ridge_threshold", self.ridge_threshold, 0.0, 100.0, lo_open=True)
@@ -230,8 +229,12 @@ class LabelConfig:
         return cls(**table).validate()
 
 
-def _choice(name: str, value: Any, choices: tuple[str, ...]) -> None:
-    if not isinstance(value, str) or value not in choices:
+def _choice(name: str, value: Any, choices: tuple[str, ...] | Registry) -> None:
+    try:
+        ok = isinstance(value, str) and value in choices
+    except InputError as exc:  # a "module:attribute" name that does not import
+        raise ConfigError(f"labels.{name} = {value!r}: {exc}") from None
+    if not ok:
         raise ConfigError(f"labels.{name} = {value!r}; allowed: {' | '.join(map(repr, choices))}")
 
 

@@ -7,16 +7,20 @@ pixel-aligned with it (:func:`label_maps`):
    disks containing each cell centre; cells in the gaps between disks take the value of their
    power-diagram element); cells no element reaches (above the free surface) are "no rock":
    strain 0, layer -1, never fault. The layer map is each cell's element's layer.
-2. the fault targets (:mod:`demseis.labels.targets`) by the configured ``method``: slip
-   surfaces traced in the element displacement (``"slip_trace"``, the default:
-   :mod:`demseis.labels.traces`), or thresholds of the strain (``"strain_band"``:
-   :mod:`demseis.labels.strain_band`).
+2. the fault targets (:mod:`demseis.labels.targets`) by the configured ``method``, an entry
+   of :data:`demseis.registry.LABEL_METHODS` (a :class:`LabelMethod`): slip surfaces traced
+   in the element displacement (``"slip_trace"``, the default: :mod:`demseis.labels.traces`),
+   or thresholds of the strain (``"strain_band"``: :mod:`demseis.labels.strain_band`).
 
 The returned arrays are the engine labels that :mod:`demseis.schema` declares, in its order
 and dtypes. :func:`sample_facts` summarises them per sample.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -27,7 +31,9 @@ from demseis.labels.strain import StrainState
 from demseis.labels.strain_band import strain_band_targets
 from demseis.labels.targets import trace_targets
 from demseis.labels.traces import slip_traces
+from demseis.registry import LABEL_METHODS
 from demseis.schema import engine_labels, sample_array
+from demseis.types import Grid
 
 
 def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = None,
@@ -91,28 +97,11 @@ def label_maps(snapshot, strain_per_element, grid, config: LabelConfig | None = 
     layer_spec = sample_array("layer")
     layer_map = np.full(grid.shape, layer_spec.fill, dtype=layer_spec.np_dtype)
     layer_map[rock] = layer[owner[rock]].astype(layer_map.dtype)
-    if cfg.method == "slip_trace":
-        if displacement is None:
-            raise InputError("label_maps: the 'slip_trace' method needs the elements' "
-                             "displacement (n, 2); see demseis.labels.displacement_history")
-        birth = None
-        if isinstance(displacement, tuple):
-            displacement, birth = displacement
-        disp = np.asarray(displacement, dtype=np.float64)
-        if disp.shape != (n, 2):
-            raise InputError(f"displacement has shape {disp.shape}; expected ({n}, 2)")
-        ux, _ = rasterise_strain(xy, radius, disp[:, 0], grid)
-        uy, _ = rasterise_strain(xy, radius, disp[:, 1], grid)
-        cohort = None
-        if birth is not None:
-            birth = np.asarray(birth)
-            if birth.shape != (n,):
-                raise InputError(f"birth has shape {birth.shape}; expected ({n},)")
-            cohort = np.where(rock, birth[np.maximum(owner, 0)], -1)
-        tr = slip_traces(strain, ux, uy, rock, float(grid.cell_m), cfg, cohort)
-        targets = trace_targets(tr, cfg, float(grid.cell_m), rock)
-    else:
-        targets = strain_band_targets(strain, rock, cfg)
+    method: LabelMethod = LABEL_METHODS.get(cfg.method)
+    if method.displacement and displacement is None:
+        raise InputError(f"label_maps: the {cfg.method!r} method needs the elements' "
+                         "displacement (n, 2); see demseis.labels.displacement_history")
+    targets = method.targets(SnapshotRaster(xy, radius, strain, owner, grid), cfg, displacement)
     return _in_store_order({**targets, "strain": strain, "layer": layer_map})
 
 
@@ -145,3 +134,78 @@ def sample_facts(maps: dict) -> dict:
     slip = np.asarray(maps["slip_m"])
     return {"has_fault": int(np.asarray(maps["fault"]).any()), "n_faults": int(ids.size),
             "max_slip_m": float(slip.max()) if slip.size else 0.0}
+
+
+@dataclass(frozen=True)
+class SnapshotRaster:
+    """One snapshot's elements and their strain on the label grid (what a label method reads).
+
+    Attributes
+    ----------
+    xy, radius : (n, 2) element centres (m) and (n,) radii (m).
+    strain : (nz, nx) rasterised strain; owner : (nz, nx) element of each cell (-1: no rock).
+    grid : the label grid.
+    """
+
+    xy: np.ndarray
+    radius: np.ndarray
+    strain: np.ndarray
+    owner: np.ndarray
+    grid: Grid
+
+    @property
+    def rock(self) -> np.ndarray:
+        """(nz, nx) cells some element reaches."""
+        return self.owner >= 0
+
+
+@dataclass(frozen=True)
+class LabelMethod:
+    """One ``[labels] method`` (an entry of :data:`demseis.registry.LABEL_METHODS`).
+
+    Attributes
+    ----------
+    targets : ``targets(raster, cfg, displacement) -> dict``: the fault targets (``fault``,
+        ``damage``, ``fault_id``, ``slip_m``, ``dip_deg``, ``sense``) of a
+        :class:`SnapshotRaster`; ``displacement`` as :func:`label_maps` takes it.
+    displacement : it needs the elements' displacement (engines compute it only then).
+    """
+
+    targets: Callable[[SnapshotRaster, LabelConfig, Any], dict[str, np.ndarray]]
+    displacement: bool = False
+
+
+def _slip_trace_targets(raster: SnapshotRaster, cfg: LabelConfig,
+                        displacement: Any) -> dict[str, np.ndarray]:
+    """Slip surfaces traced in the element displacement (:mod:`demseis.labels.traces`)."""
+    xy, radius, strain, grid, rock, owner = (raster.xy, raster.radius, raster.strain,
+                                             raster.grid, raster.rock, raster.owner)
+    n = xy.shape[0]
+    birth = None
+    if isinstance(displacement, tuple):
+        displacement, birth = displacement
+    disp = np.asarray(displacement, dtype=np.float64)
+    if disp.shape != (n, 2):
+        raise InputError(f"displacement has shape {disp.shape}; expected ({n}, 2)")
+    ux, _ = rasterise_strain(xy, radius, disp[:, 0], grid)
+    uy, _ = rasterise_strain(xy, radius, disp[:, 1], grid)
+    cohort = None
+    if birth is not None:
+        birth = np.asarray(birth)
+        if birth.shape != (n,):
+            raise InputError(f"birth has shape {birth.shape}; expected ({n},)")
+        cohort = np.where(rock, birth[np.maximum(owner, 0)], -1)
+    tr = slip_traces(strain, ux, uy, rock, float(grid.cell_m), cfg, cohort)
+    return trace_targets(tr, cfg, float(grid.cell_m), rock)
+
+
+def _strain_band_targets(raster: SnapshotRaster, cfg: LabelConfig,
+                         displacement: Any) -> dict[str, np.ndarray]:
+    """Thresholds of the strain (:mod:`demseis.labels.strain_band`)."""
+    return strain_band_targets(raster.strain, raster.rock, cfg)
+
+
+#: slip surfaces traced in the element displacement (the default)
+SLIP_TRACE = LabelMethod(_slip_trace_targets, displacement=True)
+#: thresholds of the strain
+STRAIN_BAND = LabelMethod(_strain_band_targets)

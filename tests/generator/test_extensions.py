@@ -184,3 +184,67 @@ def test_a_module_attribute_engine_and_bad_plugins_are_config_errors():
         parse_config({**tiny(), "plugins": ["nonesuch_mod"]})
     with pytest.raises(ConfigError, match="expected a list of module names"):
         parse_config({**tiny(), "plugins": "tests.generator._flat"})
+
+
+def test_a_registered_rendering_and_fault_style_go_from_generate_to_the_store(tmp_path):
+    """issue 36 item 4: a rendering and a fault style are one registration each. The toy
+    rendering images the elements rendering's columns with Vp scaled (density kept), and the
+    toy style draws no fault."""
+    from demseis.generator.render import ELEMENTS, FaultStyle, Rendering
+    from demseis.registry import FAULT_STYLES, RENDERINGS
+
+    def faster(cfg, state, maps, params):
+        img = ELEMENTS.columns(cfg, state, maps, params)
+        return type(img)(img.vp * 1.5, img.rho, img.dz_m, img.col_step_m, img.substeps,
+                         img.vp_cell * 1.5, img.impedance * 1.5)
+
+    def no_fault(cfg, maps, vp, jump):
+        return {**maps, "fault": np.zeros_like(maps["fault"])}
+
+    raw = tiny(engine="kinematic")
+    raw["sweep"]["snr_db"] = "inf"
+    raw["output"]["rendering"] = "elements"
+    raw["output"]["impedance"] = True
+    plain = demseis.generate(raw, out=tmp_path / "plain.zarr", workers=0, progress=False)
+    with RENDERINGS.registered("faster", Rendering(faster)), \
+            FAULT_STYLES.registered("none", FaultStyle(no_fault)):
+        raw["output"]["rendering"] = "faster"
+        raw["labels"]["fault_style"] = "none"
+        store = demseis.generate(raw, out=tmp_path / "fast.zarr", workers=0, progress=False)
+        assert validate_store(tmp_path / "fast.zarr").ok
+        # a rendering without the reference map cannot feed the offset throws
+        raw["labels"].update(fault_style="picks", throw_from="offset")
+        with pytest.raises(ConfigError, match="rendering = 'faster' has not"):
+            parse_config(raw)
+    a, b = np.asarray(plain.sample(0)["impedance"]), np.asarray(store.sample(0)["impedance"])
+    np.testing.assert_allclose(b, 1.5 * a, rtol=1e-5)
+    faults = [zarr.open_group(str(tmp_path / f"{n}.zarr"), mode="r")["fault"][:]
+              for n in ("plain", "fast")]
+    assert faults[0].any() and not faults[1].any()
+    with pytest.raises(ConfigError, match="rendering"):       # gone with its registration
+        parse_config({**raw, "labels": {}})
+
+
+def test_a_registered_label_method_goes_from_generate_to_the_store(tmp_path):
+    """issue 36 item 4: a label method is one registration: the toy method is the strain band
+    without its damage zone; the DEM's runs are labelled by it."""
+    from demseis.labels.maps import STRAIN_BAND, LabelMethod
+    from demseis.registry import LABEL_METHODS
+
+    def no_damage(raster, cfg, displacement):
+        targets = STRAIN_BAND.targets(raster, cfg, displacement)
+        return {**targets, "damage": (targets["damage"] == 2).astype(np.uint8) * 2}
+
+    raw = tiny(engine="dem")
+    raw["sweep"]["n_runs"] = 1
+    raw["labels"].update(method="strain_band", fault_style="traces")
+    demseis.generate(raw, out=tmp_path / "band.zarr", workers=0, progress=False)
+    with LABEL_METHODS.registered("no_damage", LabelMethod(no_damage)):
+        raw["labels"]["method"] = "no_damage"
+        demseis.generate(raw, out=tmp_path / "toy.zarr", workers=0, progress=False)
+    band, toy = (zarr.open_group(str(tmp_path / f"{n}.zarr"), mode="r") for n in ("band", "toy"))
+    assert np.isin(band["damage"][:], [1]).any() and not np.isin(toy["damage"][:], [1]).any()
+    np.testing.assert_array_equal(toy["fault"][:], band["fault"][:])
+    np.testing.assert_array_equal(toy["damage"][:] == 2, band["damage"][:] == 2)
+    with pytest.raises(ConfigError, match="labels.method"):      # gone with its registration
+        parse_config(raw)

@@ -33,6 +33,7 @@ from demseis.generator.runsetup import (RunInfo, fault_system_of, layer_thicknes
 from demseis.generator.sampling import SEED_DEM, SEED_LAYERS, SEED_PROPERTIES, RunSpec, rng_at
 from demseis.labels import displacement_history, label_maps, strain_history
 from demseis.parameters import PARAMS
+from demseis.registry import LABEL_METHODS, RENDERINGS
 from demseis.seismic import (LayerProperties, Strata, draw_layer_properties, element_properties,
                              property_grids)
 from demseis.types import Snapshot
@@ -169,17 +170,18 @@ class DemEngine:
         history = strain_history(snaps, cfg.labels)
         strata = None
         moves = None      # displacement history: the slip-trace labels and the strata need it
-        if cfg.labels.method == "slip_trace" or cfg.output.rendering == "strata":
+        wants_reference = RENDERINGS.get(cfg.output.rendering).reference
+        needs_moves = LABEL_METHODS.get(cfg.labels.method).displacement
+        if needs_moves or wants_reference:
             moves = displacement_history(snaps)
-        if cfg.output.rendering == "strata":
+        if wants_reference:
             strata = dem_strata(cfg, run, snaps, layer_props, moves)
         for k in snapshots:
             snap = snaps[k]
             vp_e, rho_e = element_properties(snap.ids, snap.layer, layer_props, model, elem_seed)
             vp_g, rho_g = property_grids(snap.xy, snap.radius, vp_e, rho_e, snap.layer, grid, model)
             labels = label_maps(snap, history[k], grid, cfg.labels,
-                                displacement=moves[k] if cfg.labels.method == "slip_trace"
-                                else None)
+                                displacement=moves[k] if needs_moves else None)
             values = {"step": snap.step, "throw_m": snap.throw_m, "n_elements": snap.n,
                       **run.info.throws_at(k, len(snaps))}
             reference = None if strata is None else partial(_reference, snaps, k, moves[k],

@@ -55,6 +55,7 @@ from demseis.generator.layout import grid_of
 from demseis.generator.runsetup import RunInfo, property_model_of, run_info, run_strata
 from demseis.generator.sampling import (SEED_DEM, SEED_LAYERS, SEED_POPULATION, SEED_PROPERTIES,
                                        RunSpec, rng_at)
+from demseis.registry import RENDERINGS
 from demseis.schema import engine_labels, sample_array
 from demseis.seismic import LayerProperties, Strata, draw_layer_properties
 
@@ -349,7 +350,7 @@ class KinematicEngine:
             values = {"step": k, "throw_m": fraction * run.info.values["throw_target_m"], "n_elements": 0,
                       **run.info.throws_at(k, n_snap)}
             reference = None
-            if cfg.output.rendering == "strata":
+            if RENDERINGS.get(cfg.output.rendering).reference:
                 if strata is None:
                     strata = kinematic_strata(cfg, p, run.spec.run, props)
                 reference = partial(_reference, cfg, p, run.spec.run, run.info, fraction)
