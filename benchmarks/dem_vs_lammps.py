@@ -10,7 +10,7 @@ Prints ONE JSON line.
 Throughput: the settled seed-scale pack (about 11,000 disks, radii 12.5-25 m, 5 km wide) runs
 ``--steps`` steps in each code, alternately ``--repeats`` times (the machine is shared, so both
 are timed side by side and medians are compared). Element-steps/s = n x steps / loop seconds;
-LAMMPS' loop seconds are its "Loop time"; demseis' the wall time of ``Engine.run``. CPU-time
+LAMMPS' loop seconds are its "Loop time"; demseis' the wall time of ``Integrator.run``. CPU-time
 rates are reported too (LAMMPS: loop time x its "% CPU use").
 
 Matched settings (SI units, 2D, per metre of thickness):
@@ -59,7 +59,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from demseis.dem import Material  # noqa: E402,F401
 from demseis.dem.assembly import draw_radii, loose_grid  # noqa: E402
 from demseis.diagnostics.bench import BENCH_MATERIAL, load_pack, pack_walls, seed_pack  # noqa: E402
-from demseis.dem.engine import Engine, time_step  # noqa: E402
+from demseis.dem.integrator import Integrator, time_step  # noqa: E402
 
 
 def write_lammps_data(path: Path, xy: np.ndarray, radius: np.ndarray, box: tuple) -> None:
@@ -137,7 +137,7 @@ def run_lammps(workdir: Path, xy, radius, mat, dt, skin, walls, n_steps, dump=Fa
 
 
 def run_demseis(xy, radius, mat, walls, n_steps, skin):
-    eng = Engine(xy, radius, mat, skin_m=skin)
+    eng = Integrator(xy, radius, mat, skin_m=skin)
     eng.set_walls(walls)
     eng.run(5)  # compile / load the Numba cache, build the list
     t0 = time.perf_counter()

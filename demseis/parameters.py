@@ -1,7 +1,7 @@
 """Every parameter of demseis, declared once: name, unit, range, default, doc and level.
 
 Config validation (:mod:`demseis.generator.config`), the stage checks (the DEM's
-:func:`~demseis.dem.engine.validate_material` and :func:`~demseis.dem.fault.validate_fault`, the
+:func:`~demseis.dem.integrator.validate_material` and :func:`~demseis.dem.fault.validate_fault`, the
 rock-property model's :meth:`~demseis.seismic.PropertyModel.validate`, the wavelet and noise
 checks), the defaults of :class:`~demseis.dem.Material` and
 :class:`~demseis.seismic.PropertyModel`, ``demseis params`` and the table in

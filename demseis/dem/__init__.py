@@ -17,7 +17,7 @@ geometry; ``build_assembly(..., pack=...)`` then only assigns layers.
 """
 
 from demseis.dem.assembly import Assembly, Pack, build_assembly, settle_pack
-from demseis.dem.engine import Engine, time_step
+from demseis.dem.integrator import Integrator, time_step
 from demseis.dem.basement import BasementFault, FaultSystem
 from demseis.dem.fault import simulate
 from demseis.dem.reference import (
@@ -29,6 +29,6 @@ from demseis.dem.reference import (
 )
 from demseis.dem.types import BRITTLE, Material, NormalFault
 
-__all__ = ["BRITTLE", "Assembly", "BasementFault", "Engine", "FaultSystem", "MapInfo", "Material",
+__all__ = ["BRITTLE", "Assembly", "BasementFault", "FaultSystem", "Integrator", "MapInfo", "Material",
            "NormalFault", "Pack", "ReferenceMap", "build_assembly", "element_maps",
            "reference_coordinates", "reference_map", "settle_pack", "simulate", "time_step"]

@@ -425,7 +425,7 @@ def run_steps(n_steps, dt, pos, vel, force, radius, mass, inv_mass, eta, gravity
     n_steps : int; dt : float time step (s).
     pos, vel, force : (n, 2) float64 state, updated in place. ``force`` must hold the forces
         of the current positions on entry (call
-        :meth:`demseis.dem.engine.Engine.compute_forces` once first).
+        :meth:`demseis.dem.integrator.Integrator.compute_forces` once first).
     radius, mass, inv_mass, eta : (n,) float64.
     gravity : float (m/s^2); cmat, ks_ratio, c0_heal : contact material (see pair_forces).
     wall_kn, wall_ks, wall_mu : float wall stiffnesses (N/m) and friction coefficient.

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from demseis.dem import detmath
-from demseis.dem.engine import Engine, time_step, validate_material
+from demseis.dem.integrator import Integrator, time_step, validate_material
 from demseis.dem.types import Material
 from demseis.errors import InputError
 
@@ -196,7 +196,7 @@ def settle_pack(width_m: float, height_m: float, *, radius_min_m: float = 12.5,
     soft = replace(material, kn_n_m=material.kn_n_m / _SETTLE_SOFTEN)
     m_big = material.density_kg_m3 * math.pi * float(radii.max()) ** 2
     dt1 = 0.25 * math.sqrt(m_big / soft.kn_n_m)
-    eng = Engine(xy, radii, soft, dt_s=dt1, mass_kg=m_big, eta=_FALL_RATE * m_big,
+    eng = Integrator(xy, radii, soft, dt_s=dt1, mass_kg=m_big, eta=_FALL_RATE * m_big,
                  friction=0.0, cohesion_n=0.0, wall_friction=0.0, skin_m=0.8 * radius_min_m)
     top = float(xy[:, 1].max()) + 10 * radius_max_m
     walls = np.array([[0.0, -radius_max_m, 0.0, top],
@@ -216,7 +216,7 @@ def settle_pack(width_m: float, height_m: float, *, radius_min_m: float = 12.5,
     # Stage 2: the real masses, stiffness, friction and damping rate; contacts load up.
     mass = material.density_kg_m3 * math.pi * radii**2
     dt = time_step(float(radii.min()), material.density_kg_m3, material.kn_n_m)
-    eng2 = Engine(eng.pos, radii, material, dt_s=dt, eta=_SETTLE_RATE * mass)
+    eng2 = Integrator(eng.pos, radii, material, dt_s=dt, eta=_SETTLE_RATE * mass)
     eng2.set_walls(walls)
     eng2.box = eng.box
     eng2.vmax_limit = 400.0

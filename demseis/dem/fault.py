@@ -43,7 +43,7 @@ from demseis.dem import detmath
 from demseis.dem.assembly import Assembly
 from demseis.dem.basement import (BasementFault, BlockMotion, FaultSystem, block_kinematics,
                                   check_fault_fields, validate_system)
-from demseis.dem.engine import Engine, time_step, validate_material
+from demseis.dem.integrator import Integrator, time_step, validate_material
 from demseis.dem.types import Material, NormalFault
 from demseis.types import Snapshot
 from demseis.errors import InputError
@@ -74,7 +74,7 @@ def surface_profile(xy: np.ndarray, radius: np.ndarray, x_edges: np.ndarray) -> 
     return top
 
 
-def _deposit(eng: Engine, x_lo: float, x_hi: float, level_m: float, template_xy: np.ndarray,
+def _deposit(eng: Integrator, x_lo: float, x_hi: float, level_m: float, template_xy: np.ndarray,
              template_r: np.ndarray, template_w: float, template_h: float,
              rng: np.random.Generator) -> int:
     """Fill the space between the top surface and ``level_m`` over [x_lo, x_hi] with disks.
@@ -392,7 +392,7 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
     # dt from Eq. 5 with the smallest radius that can ever occur (sediment included)
     dt = time_step(min(rmin, float(asm.radius.min())), material.density_kg_m3,
                    material.kn_n_m)
-    eng = Engine(xy0, asm.radius, material, dt_s=dt)
+    eng = Integrator(xy0, asm.radius, material, dt_s=dt)
     if cmat is not None:
         eng.set_element_material(cmat)
 

@@ -22,7 +22,7 @@ class Material:
     """Mechanical parameters of the elements and their contacts (SI units).
 
     Defaults and allowed ranges are declared once in :mod:`demseis.parameters` (``demseis
-    params``); :func:`demseis.dem.engine.validate_material` checks against them.
+    params``); :func:`demseis.dem.integrator.validate_material` checks against them.
 
     Attributes
     ----------

@@ -43,7 +43,7 @@ import numpy as np
 from demseis.datasets.dataset import FaultSegDataset, ShardAwareSampler, crop_offsets
 from demseis.datasets import create_store, finalize_store, write_shard
 from demseis.dem.assembly import Pack, settle_pack
-from demseis.dem.engine import Engine
+from demseis.dem.integrator import Integrator
 from demseis.dem.types import Material
 from demseis.diagnostics.toys import disk_pack, faulted_sequence, kinematic_fault
 from demseis.errors import InputError, import_torch
@@ -125,7 +125,7 @@ def dem_benchmark(xy: np.ndarray, radius: np.ndarray, n_steps: int = 2000,
     """
     if n_steps < 1:
         raise InputError(f"--steps {n_steps}: must be >= 1")
-    eng = Engine(xy, radius, material)
+    eng = Integrator(xy, radius, material)
     eng.set_walls(pack_walls(xy, radius))
     eng.run(warmup_steps)
     t0 = time.perf_counter()

@@ -19,12 +19,12 @@ from dataclasses import replace
 import numpy as np
 
 from demseis.dem.assembly import settle_pack
-from demseis.dem.engine import Engine
+from demseis.dem.integrator import Integrator
 from demseis.dem.types import Material
 from demseis.errors import InputError
 
 
-def _wall_normal_forces(eng: Engine) -> np.ndarray:
+def _wall_normal_forces(eng: Integrator) -> np.ndarray:
     """Normal force (N/m) each wall of ``eng`` carries: sum of Kn * overlap of its contacts."""
     out = np.zeros(eng.walls.shape[0])
     for w, (x0, y0, x1, y1) in enumerate(eng.walls):
@@ -53,7 +53,7 @@ def biaxial_test(material: Material = Material(), sigma3_pa: float = 10e6, *,
     mat0 = replace(material, gravity_m_s2=0.0)
     xy, r = pack.xy, pack.radius
     mass = material.density_kg_m3 * math.pi * r**2
-    eng = Engine(xy, r, mat0, eta=1.0 * mass)
+    eng = Integrator(xy, r, mat0, eta=1.0 * mass)
     top = float(np.max(xy[:, 1] + r))
     big = 10 * width_m
     # walls: 0 bottom, 1 left, 2 right, 3 top (long enough to stay covered)

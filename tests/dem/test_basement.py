@@ -221,9 +221,9 @@ def test_uplift_is_eroded_not_clipped(asm, runs):
 
 
 def test_remove_elements_keeps_state_and_history(asm):
-    from demseis.dem import Engine
+    from demseis.dem import Integrator
 
-    eng = Engine(asm.xy, asm.radius, Material())
+    eng = Integrator(asm.xy, asm.radius, Material())
     eng.rebuild()
     eng.run(300)
     keep = np.ones(eng.n, bool)

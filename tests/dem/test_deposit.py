@@ -15,7 +15,7 @@ from demseis.dem.fault import _deposit
 
 
 class _Sink:
-    """The part of Engine that _deposit uses."""
+    """The part of Integrator that _deposit uses."""
 
     def __init__(self, pos: np.ndarray, radius: np.ndarray) -> None:
         self.pos = pos

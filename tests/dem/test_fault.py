@@ -102,16 +102,16 @@ def test_bad_input_and_instability(pack):
     with pytest.raises(InputError, match="radius_max_m"):
         build_assembly(W, H, radius_min_m=30.0, radius_max_m=20.0)
     # a 100x too stiff contact with the Eq. 5 step of the nominal stiffness blows up
-    from demseis.dem import Engine
-    eng = Engine(asm.xy, asm.radius, Material(kn_n_m=1e12), dt_s=0.01)
+    from demseis.dem import Integrator
+    eng = Integrator(asm.xy, asm.radius, Material(kn_n_m=1e12), dt_s=0.01)
     with pytest.raises(SimulationError, match="unstable"):
         eng.run(2000)
 
 
 @pytest.mark.parametrize("cause", ["nan", "ke", "box"])
 def test_instability_names_its_cause(pack, cause):
-    from demseis.dem import Engine
-    eng = Engine(pack.xy, pack.radius, Material())
+    from demseis.dem import Integrator
+    eng = Integrator(pack.xy, pack.radius, Material())
     eng.box = np.array([-100.0, W + 100.0, -100.0, 3 * H])
     eng.vmax_limit = 100.0
     k = int(np.argmax(pack.xy[:, 1]))  # the top element: free above

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from demseis.dem import Engine, Material, settle_pack
-from demseis.dem.engine import time_step
+from demseis.dem import Integrator, Material, settle_pack
+from demseis.dem.integrator import time_step
 
 FREE = Material(gravity_m_s2=0.0, damping_scale=0.0, friction=0.0, cohesion_n=0.0)
 
@@ -23,7 +23,7 @@ def test_collision_lasts_half_period():
     m_eff = _m(r1) * _m(r2) / (_m(r1) + _m(r2))
     t_expect = math.pi * math.sqrt(m_eff / FREE.kn_n_m)
     dt = t_expect / 2000
-    eng = Engine(np.array([[0.0, 0.0], [35.02, 0.0]]), np.array([r1, r2]), FREE, dt_s=dt)
+    eng = Integrator(np.array([[0.0, 0.0], [35.02, 0.0]]), np.array([r1, r2]), FREE, dt_s=dt)
     eng.vel[:] = [[1.0, 0.0], [-1.0, 0.0]]
     in_contact = []
     for _ in range(4000):
@@ -43,7 +43,7 @@ def test_bonded_pair_oscillates_with_full_period():
     m_eff = _m(r1) * _m(r2) / (_m(r1) + _m(r2))
     period = 2 * math.pi * math.sqrt(m_eff / mat.kn_n_m)
     dt = period / 1000
-    eng = Engine(np.array([[0.0, 0.0], [35.0, 0.0]]), np.array([r1, r2]), mat, dt_s=dt)
+    eng = Integrator(np.array([[0.0, 0.0], [35.0, 0.0]]), np.array([r1, r2]), mat, dt_s=dt)
     assert eng.bond_initial_contacts() == 1
     eng.vel[:] = [[-0.5, 0.0], [0.5, 0.0]]
     gap = []
@@ -57,7 +57,7 @@ def test_bonded_pair_oscillates_with_full_period():
     assert measured == pytest.approx(period, rel=2e-3)
 
 
-def _bonded_energy(eng: Engine) -> float:
+def _bonded_energy(eng: Integrator) -> float:
     """Kinetic (full-step velocities) plus elastic energy of bonds and contacts (J/m)."""
     e = eng.kinetic_energy()
     for i in range(eng.n):
@@ -89,7 +89,7 @@ def test_undamped_energy_drift_over_1e4_steps(dt_factor, drift_max, swing_max):
     mat = Material(gravity_m_s2=0.0, damping_scale=0.0, friction=0.0, cohesion_n=0.0,
                    model="bonded", bond_strain=0.9)
     dt5 = time_step(r.min(), mat.density_kg_m3, mat.kn_n_m)
-    eng = Engine(pos, r, mat, skin_m=25.0, dt_s=dt_factor * dt5)
+    eng = Integrator(pos, r, mat, skin_m=25.0, dt_s=dt_factor * dt5)
     eng.bond_initial_contacts(tol_frac=0.05)
     assert eng.bond.sum() == 3 * nx * ny - 2 * nx - 2 * ny + 1
     eng.vel[:] = np.random.default_rng(1).normal(0, 0.5, eng.vel.shape)
@@ -116,7 +116,7 @@ def test_block_on_incline_slides_iff_tan_theta_exceeds_mu(delta_deg, slides):
     t = np.array([math.cos(theta), -math.sin(theta)])  # down-slope direction
     nrm = np.array([math.sin(theta), math.cos(theta)])
     start = (r - overlap) * nrm
-    eng = Engine(start[None, :], np.array([r]), mat)
+    eng = Integrator(start[None, :], np.array([r]), mat)
     eng.set_walls(np.r_[-2000 * t, 2000 * t][None, :])
     # the shear spring starts unloaded: let the initial elastic transient pass, then watch
     eng.run(int(1.0 / eng.dt))
@@ -136,7 +136,7 @@ def test_bond_breaks_at_strain_r0_for_ever():
     r0 = 0.02
     mat = Material(gravity_m_s2=0.0, damping_scale=0.0, model="bonded", bond_strain=r0)
     R = 40.0
-    eng = Engine(np.array([[0.0, 0.0], [R, 0.0]]), np.array([20.0, 20.0]), mat)
+    eng = Integrator(np.array([[0.0, 0.0], [R, 0.0]]), np.array([20.0, 20.0]), mat)
     eng.bond_initial_contacts()
     for strain, bonded, force in [(0.5 * r0, True, -mat.kn_n_m * 0.5 * r0 * R),
                                   (0.99 * r0, True, -mat.kn_n_m * 0.99 * r0 * R),
@@ -155,7 +155,7 @@ def test_settled_column_vertical_stress_is_lithostatic():
     width, height = 500.0, 800.0
     mat = Material()
     pack = settle_pack(width, height, material=mat, rng=3)
-    eng = Engine(pack.xy, pack.radius, mat, wall_friction=0.0,
+    eng = Integrator(pack.xy, pack.radius, mat, wall_friction=0.0,
                  eta=0.5 * mat.density_kg_m3 * math.pi * pack.radius**2)
     eng.set_walls(np.array([[0, -30, 0, 2000], [width, -30, width, 2000],
                             [-30, 0, width + 30, 0]], float))

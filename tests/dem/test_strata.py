@@ -8,7 +8,7 @@ import math
 import pytest
 
 from demseis.dem import Material
-from demseis.dem.engine import validate_material
+from demseis.dem.integrator import validate_material
 from demseis.dem.strata import alternation, is_strong, layer_materials
 from demseis.errors import InputError
 from demseis.parameters import PARAMS

@@ -11,7 +11,7 @@ import pytest
 
 from demseis.dem import BasementFault, FaultSystem, Material, build_assembly, simulate
 from demseis.dem.basement import block_kinematics, single
-from demseis.dem.engine import time_step
+from demseis.dem.integrator import time_step
 from demseis.dem.fault import basement_walls, stretch_shift, wall_ends
 from demseis.errors import ConfigError, InputError
 
@@ -164,18 +164,18 @@ def test_shortening_pushes_the_right_wall_in():
 
 @pytest.fixture
 def engines(monkeypatch) -> list:
-    """Every DEM Engine that ``simulate`` builds during the test, in order (their walls are
+    """Every DEM Integrator that ``simulate`` builds during the test, in order (their walls are
     what the basement was at the end of the run)."""
     import demseis.dem.fault as fault_module
 
     made = []
 
-    class Recording(fault_module.Engine):
+    class Recording(fault_module.Integrator):
         def __init__(self, *args, **kwargs):
             super().__init__(*args, **kwargs)
             made.append(self)
 
-    monkeypatch.setattr(fault_module, "Engine", Recording)
+    monkeypatch.setattr(fault_module, "Integrator", Recording)
     return made
 
 

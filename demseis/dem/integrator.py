@@ -1,6 +1,6 @@
 """The DEM state and its stepping loop (a thin Python shell around :mod:`demseis.dem._kernels`).
 
-:class:`Engine` owns the arrays of one assembly (positions, velocities, forces, the Verlet list
+:class:`Integrator` owns the arrays of one assembly (positions, velocities, forces, the Verlet list
 with its pair history, walls), advances them with :func:`demseis.dem._kernels.run_steps`, grows
 the neighbour-list capacity when needed, and turns an unstable state into a
 :class:`demseis.errors.SimulationError` that names the cause.
@@ -53,7 +53,7 @@ def validate_material(material: Material) -> None:
                                          InputError)
 
 
-class Engine:
+class Integrator:
     """Mutable DEM state: elements, pair history, walls; advanced by :meth:`run`.
 
     Parameters
@@ -129,19 +129,19 @@ class Engine:
 
     # ------------------------------------------------------------------ set-up helpers
     def _material_row(self) -> np.ndarray:
-        """[Kn, mu, C0, r0] of the engine's material (with the constructor's overrides)."""
+        """[Kn, mu, C0, r0] of the integrator's material (with the constructor's overrides)."""
         return np.array([self.kn, self.mu, self.c0, self.r0])
 
     def set_element_material(self, cmat: np.ndarray) -> None:
         """Per-element contact material: (n, 4) [Kn (N/m), mu, C0 (N), r0]; a pair uses the
-        smaller value of its two elements. Kn above the engine's Kn needs a smaller dt."""
+        smaller value of its two elements. Kn above the integrator's Kn needs a smaller dt."""
         cmat = np.ascontiguousarray(cmat, dtype=np.float64)
         if cmat.shape != (self.n, 4) or not np.all(np.isfinite(cmat)) or np.any(cmat[:, 0] <= 0):
             raise InputError(f"cmat must be a finite ({self.n}, 4) array with Kn > 0, got shape "
                              f"{cmat.shape}")
         if cmat[:, 0].max() > self.kn * (1 + 1e-12):
             raise InputError(f"per-element Kn up to {cmat[:, 0].max():.3g} N/m exceeds the "
-                             f"engine's Kn {self.kn:.3g} N/m that sets dt")
+                             f"integrator's Kn {self.kn:.3g} N/m that sets dt")
         self.cmat = cmat.copy()
         self._forces_valid = False
 
