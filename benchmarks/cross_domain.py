@@ -1,9 +1,9 @@
 """Cross-domain transfer: train on DEM, kinematic or a 50/50 mix; test on held-out runs of
 each, and optionally on field sections (SEG-Y + fault mask).
 
-Every cell uses the same network (:func:`demseis.evaluation.train.build_unet`), budget,
+Every cell uses the same network (:func:`demseis.learning.train.build_unet`), budget,
 augmentation (flips, polarity, amplitude scaling) and seeds, on the shared training loop
-:func:`demseis.evaluation.train.train_unet`. Runs are split 75 / 0 / 25 % train / val / test by
+:func:`demseis.learning.train.train_unet`. Runs are split 75 / 0 / 25 % train / val / test by
 run in each store (the same split for every cell); the mix draws each batch half from each
 store's train runs on average. Scores: precision / recall / F1 at threshold 0.5 and AP, at
 tolerances 2 and 4 px, of whole-section predictions.
@@ -72,7 +72,7 @@ def test_sets(args: argparse.Namespace, fr: tuple[float, float, float]) -> dict:
 
 def score_set(model, sections, truth, device: str) -> dict:
     """P/R/F1/AP at tolerances 2 and 4 of a model on a test set (sections may differ in shape)."""
-    from demseis.evaluation.train import predict_sections
+    from demseis.learning.train import predict_sections
 
     probs = [predict_sections(model, np.asarray(s)[None], device=device)[0] for s in sections]
     out = {}
@@ -157,7 +157,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--figure", help="PNG of example predictions of the models trained now")
     args = ap.parse_args(argv)
 
-    from demseis.evaluation.train import train_unet
+    from demseis.learning.train import train_unet
 
     cuda, device, steps, base = budget(args, 200)
     fr = (1.0 - args.test_fraction, 0.0, args.test_fraction)

@@ -16,8 +16,8 @@ Built stores go to ``--cache`` (``stores/NAME-<config digest>.zarr``); a complet
 same config is reused. Trained models are kept there too (``models/``), so that scoring a new
 field set does not retrain.
 
-Every model is :func:`demseis.evaluation.train.build_unet` trained by
-:func:`demseis.evaluation.train.train_unet` on the train runs (75 %) of its store(s): the same
+Every model is :func:`demseis.learning.train.build_unet` trained by
+:func:`demseis.learning.train.train_unet` on the train runs (75 %) of its store(s): the same
 augmentation (flips, polarity, amplitude), budget (``--steps --base --crop --batch --lr``)
 and seeds for all. CUDA with mixed precision when present (default 3000 steps, base 32), else
 the CPU protocol: 600 steps, base 16, crop 96, batch 8. One 600-step CPU training (2 torch
@@ -264,7 +264,7 @@ def scale_factor(scale: str, train_period: float, section: np.ndarray) -> float:
 
 def predict(model, section: np.ndarray, factor: float) -> np.ndarray:
     """Fault probability of ``section`` resampled by ``factor``, on the section's own grid."""
-    from demseis.evaluation.model import predict_array
+    from demseis.learning.model import predict_array
 
     if abs(factor - 1.0) < 1e-3:
         return predict_array(model, section)
@@ -285,7 +285,7 @@ def item_scores(model, key: str, item: dict, tolerances: list[float], train_peri
         out = {"n_sections": len(secs)}
         if not secs:
             return out
-        from demseis.evaluation.train import predict_sections
+        from demseis.learning.train import predict_sections
 
         probs = list(predict_sections(model, np.stack(secs)))
         for tol in tolerances:
@@ -451,7 +451,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     import torch
 
-    from demseis.evaluation.train import build_unet, train_unet
+    from demseis.learning.train import build_unet, train_unet
 
     cuda, device, steps, base = budget(args, 600)
     fr = (1.0 - args.test_fraction, 0.0, args.test_fraction)

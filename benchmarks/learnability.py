@@ -1,6 +1,6 @@
 """How well a U-Net learns a store's fault labels: train on the train runs, score held-out runs.
 
-Trains the examples' U-Net (:func:`demseis.evaluation.train.train_unet`) for a fixed number of
+Trains the examples' U-Net (:func:`demseis.learning.train.train_unet`) for a fixed number of
 steps on random crops of the ``train`` runs of STORE, predicts whole sections of (a sample of)
 the train runs and of the held-out runs, and scores both against the store's ``fault`` labels
 at tolerances 2 and 4 px (precision / recall / F1 at threshold 0.5, and AP). Prints one JSON
@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from demseis.datasets import FaultSegDataset
     from demseis.evaluation import score
-    from demseis.evaluation.train import predict_sections, train_unet
+    from demseis.learning.train import predict_sections, train_unet
 
     cuda = torch.cuda.is_available() if args.device is None else args.device.startswith("cuda")
     steps = args.steps or (3000 if cuda else 300)

@@ -306,9 +306,9 @@ def train(store: Any, out: str | Path = "model.pt", **kwargs: Any) -> dict[str, 
     **kwargs : ``weights`` (one positive number per store; default equal), ``steps`` (300),
         ``crop``, ``batch``, ``base``, ``lr``, ``seed``, ``device``, ``val_every``,
         ``save_every``, ``resume``, ``threads``, ``progress``, ``log``
-        (:func:`demseis.evaluation.model.train_model`).
+        (:func:`demseis.learning.model.train_model`).
     """
-    from demseis.evaluation.model import train_model  # lazy: torch
+    from demseis.learning.model import train_model  # lazy: torch
 
     if isinstance(store, (list, tuple)):
         return train_model([str(getattr(s, "path", s)) for s in store], out, **kwargs)
@@ -322,7 +322,7 @@ def predict(model: Any, source: Any, out: str | Path | None = None, *,
     Parameters
     ----------
     model : the model file (``model.pt``) or a model loaded by
-        :func:`demseis.evaluation.model.load_model`.
+        :func:`demseis.learning.model.load_model`.
     source : a SEG-Y file (``.sgy``, ``.segy``), a ``.npy`` file, or an array (H, W) or
         (N, H, W) of any size.
     out : where to write (``.sgy`` with the input's headers, or ``.npy``); None returns the
@@ -334,7 +334,7 @@ def predict(model: Any, source: Any, out: str | Path | None = None, *,
     -------
     Path of ``out``, or the probability array when ``out`` is None.
     """
-    from demseis.evaluation import model as m  # lazy: torch
+    from demseis.learning import model as m  # lazy: torch
 
     if out is not None:  # the paths are checked before the model is loaded
         return m.predict_file(model, source, out, device=device, overwrite=overwrite)

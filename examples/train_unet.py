@@ -7,7 +7,7 @@ Usage::
 What it does:
 
 1. trains a 3-level U-Net (16-32-64 channels, ~120k parameters; the training loop is
-   :func:`demseis.evaluation.train.train_unet`, shared with ``benchmarks/learnability.py``) on
+   :func:`demseis.learning.train.train_unet`, shared with ``benchmarks/learnability.py``) on
    random crops of the ``train`` split of the store (seismic in, fault mask out) with
    binary cross-entropy (positive weight = background/fault pixel ratio, capped at 50) plus soft
    Dice, Adam, for a wall-clock budget, with augmentation (left-right and polarity flips,
@@ -40,7 +40,7 @@ import numpy as np
 
 def train(args: argparse.Namespace) -> tuple[object, dict]:
     """Train for ``args.minutes`` of wall clock; returns the model and a log dict."""
-    from demseis.evaluation.train import train_unet
+    from demseis.learning.train import train_unet
 
     return train_unet(args.store, minutes=args.minutes, crop=args.crop, batch=args.batch,
                       base=args.base, lr=args.lr, seed=args.seed, threads=args.threads,
@@ -91,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
 
     import demseis
     from demseis.evaluation import baseline_fault_probability
-    from demseis.evaluation.train import predict_sections
+    from demseis.learning.train import predict_sections
 
     os.makedirs(args.out_dir, exist_ok=True)
     model, info = train(args)

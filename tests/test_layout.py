@@ -1,6 +1,6 @@
 """The import graph of the package runs one way, has no cycles, and nothing imports ``tests``.
 
-cli -> plotting / api -> generator -> evaluation -> datasets -> dem | seismic | labels
+cli -> plotting / api -> generator | learning -> evaluation -> datasets -> dem | seismic | labels
 -> types / parameters / schema -> registry -> errors | interrupts (standard library only). A stage (dem, seismic, labels) never
 imports ``datasets`` and reaches another stage only through its package (``from demseis.seismic
 import rasterise``), never its modules. ``diagnostics`` (benchmarks, calibration, measures, toy
@@ -27,7 +27,7 @@ RANK = {
     "dem": 3, "seismic": 3, "labels": 3,
     "datasets": 4,
     "evaluation": 5,
-    "generator": 6,
+    "generator": 6, "learning": 6,
     "api": 7, "plotting": 7, "diagnostics": 7,
     "cli": 8, "__main__": 9,
 }

@@ -1,6 +1,6 @@
 """``demseis train`` and ``demseis predict``: a fault-segmentation U-Net from a store, and the
 fault probability of any section (SEG-Y or .npy) with it. Both need torch (the ``[torch]``
-extra); see :mod:`demseis.evaluation.model`."""
+extra); see :mod:`demseis.learning.model`."""
 
 from __future__ import annotations
 

@@ -91,7 +91,7 @@ def test_field_reader_reads_back_the_section(bench, stores):
 
 
 def test_mixed_training_draws_from_both_stores(stores):
-    from demseis.evaluation.train import train_unet
+    from demseis.learning.train import train_unet
 
     dem, kin, _ = stores
     kw = dict(steps=2, crop=32, batch=2, base=4, threads=1, device="cpu", log=None,
@@ -107,7 +107,7 @@ def test_mixed_training_draws_from_both_stores(stores):
 def test_validation_keeps_the_best_model_and_stops_early(stores, tmp_path):
     import torch
 
-    from demseis.evaluation.train import build_unet, train_unet
+    from demseis.learning.train import build_unet, train_unet
 
     _, kin, _ = stores
     ckpt = tmp_path / "best.pt"

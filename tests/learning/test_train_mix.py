@@ -14,7 +14,7 @@ torch = pytest.importorskip("torch")
 import demseis  # noqa: E402
 from demseis.cli import main  # noqa: E402
 from demseis.errors import InputError  # noqa: E402
-from demseis.evaluation.train import check_weights, mix_sampler, train_unet  # noqa: E402
+from demseis.learning.train import check_weights, mix_sampler, train_unet  # noqa: E402
 from tests.evaluation._helpers import toy_store  # noqa: E402
 
 FAST = ["--base", "4", "--batch", "4", "--threads", "1", "--device", "cpu", "--quiet"]

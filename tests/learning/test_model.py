@@ -15,7 +15,7 @@ pytest.importorskip("torch")
 import demseis  # noqa: E402
 from demseis.cli import main  # noqa: E402
 from demseis.errors import InputError  # noqa: E402
-from demseis.evaluation.model import load_model, predict_array  # noqa: E402
+from demseis.learning.model import load_model, predict_array  # noqa: E402
 from tests.generator._helpers import kinematic_cfg  # noqa: E402
 
 FAST = ["--base", "4", "--batch", "4", "--threads", "1", "--device", "cpu", "--quiet"]

@@ -1,4 +1,4 @@
-"""demseis.evaluation.train: the shared U-Net training loop (fixed steps), prediction, errors;
+"""demseis.learning.train: the shared U-Net training loop (fixed steps), prediction, errors;
 and benchmarks/learnability.py end to end on a tiny store."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import pytest
 pytest.importorskip("torch")
 
 from demseis.errors import InputError  # noqa: E402
-from demseis.evaluation.train import build_unet, predict_sections, train_unet  # noqa: E402
+from demseis.learning.train import build_unet, predict_sections, train_unet  # noqa: E402
 from tests.evaluation._helpers import toy_store  # noqa: E402
 
 BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "learnability.py"
@@ -73,7 +73,7 @@ def test_learnability_benchmark_test_f1_at_train_threshold_is_read_off_the_test_
     """The held-out F1 at the train runs' best threshold equals a fresh score of the held-out
     predictions at that threshold (the benchmark reads it off the test F1 curve)."""
     from demseis.evaluation import score
-    from demseis.evaluation import train as train_mod
+    from demseis.learning import train as train_mod
 
     store = tmp_path / "tiny.zarr"
     toy_store(store)

@@ -3,12 +3,12 @@ and from the file to the fault probability of any section (a store's, or your SE
 
 ::
 
-    from demseis.evaluation.model import train_model, predict_file
+    from demseis.learning.model import train_model, predict_file
     metrics = train_model("quick.zarr", "model.pt", steps=300)  # held-out precision, recall, F1, AP
     metrics = train_model(["a.zarr", "b.zarr"], "ab.pt", weights=[2, 1])   # a mix of two stores
     predict_file("model.pt", "line.sgy", "faults.sgy")          # probability with line.sgy's headers
 
-Training is :func:`demseis.evaluation.train.train_unet` on the store's ``train`` runs; the model
+Training is :func:`demseis.learning.train.train_unet` on the store's ``train`` runs; the model
 kept is the best on the ``val`` runs, and the metrics are those of the ``test`` runs (never seen
 in training or selection), scored by :func:`demseis.evaluation.scoring.score_store` at a
 tolerance of :data:`TOLERANCE_PX` pixels. The three splits are whole runs
@@ -37,7 +37,7 @@ from demseis.datasets import FaultSegDataset, open_store, store_layout
 from demseis.errors import InputError, import_torch
 from demseis.evaluation.scoring import SampleCounts, score_store, summarise
 from demseis.evaluation.segyfile import is_segy, read_segy_section, write_segy_like
-from demseis.evaluation.train import build_unet, check_weights, predict_sections, train_unet
+from demseis.learning.train import build_unet, check_weights, predict_sections, train_unet
 
 #: the model file's format tag and version
 FORMAT = "demseis-unet"

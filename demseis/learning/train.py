@@ -6,7 +6,7 @@ light.
 
 ::
 
-    from demseis.evaluation.train import train_unet, predict_sections
+    from demseis.learning.train import train_unet, predict_sections
     model, log = train_unet("quick.zarr", steps=300)             # train split, random crops
     prob = predict_sections(model, sections)                      # (N, H, W) probabilities
 
