@@ -247,8 +247,8 @@ def open(path: str | Path) -> Store:  # noqa: A001 - demseis.open, like xarray.o
 
 def score(pred: Any, store: Any, **kwargs: Any) -> Any:
     """Score fault predictions against a store's labels
-    (:func:`demseis.evaluation.scoring.score_store`), or against a hand-picked mask
-    (:func:`demseis.evaluation.scoring.score_mask`).
+    (:func:`demseis.evaluation.store_scoring.score_store`), or against a hand-picked mask
+    (:func:`demseis.evaluation.store_scoring.score_mask`).
 
     Parameters
     ----------
@@ -263,14 +263,14 @@ def score(pred: Any, store: Any, **kwargs: Any) -> Any:
 
     Returns
     -------
-    demseis.evaluation.scoring.StoreScore
+    demseis.evaluation.store_scoring.StoreScore
         ``.overall`` (precision, recall, F1, IoU, ODS/OIS/AP), ``.rows`` per group,
         ``.table()``, ``.write(prefix)``. The same protocol and fields for a mask, with the
         overall group only.
     """
     # lazy: SciPy, which open() never needs
     from demseis.evaluation.fieldio import is_mask_file
-    from demseis.evaluation.scoring import score_mask, score_store
+    from demseis.evaluation.store_scoring import score_mask, score_store
 
     is_path = isinstance(store, (str, Path))
     if is_path and os.path.isfile(store) and not is_mask_file(store):

@@ -17,7 +17,7 @@ import numpy as np
 
 from demseis.datasets import open_store, read_particles, read_sample, shard_status
 from demseis.errors import ConfigError, InputError
-from demseis.evaluation.realism import report_rows
+from demseis.evaluation.realism_report import report_rows
 from demseis.evaluation.segyfile import read_segy_section
 from demseis.generator.config import PRESETS, Config, load_config, stored_config
 from demseis.generator.engines import get_engine, require_particles
@@ -337,7 +337,7 @@ def plot_snapshots(snaps: Sequence[Snapshot], path: str | os.PathLike, *, n_grou
 
 
 def plot_realism(report: dict, out: str | Path, *, credit: str | None = None) -> Path:
-    """The figure of a realism report (:func:`demseis.evaluation.realism.realism_report`).
+    """The figure of a realism report (:func:`demseis.evaluation.realism_report.realism_report`).
 
     Top: a measured store sample with its fault label, the field section (when the report has
     one), the mean amplitude spectra, and the table's scalar measures. Bottom: the store's

@@ -1,6 +1,6 @@
 """docs/figures/realism_quick.png and the table of docs/realism.md: a store beside F3.
 
-Runs `demseis.evaluation.realism.realism_report` on a store and the F3 field section
+Runs `demseis.evaluation.realism_report.realism_report` on a store and the F3 field section
 (by default the project's field reference, ../shared/field/f3_inline.sgy beside the
 checkout), draws `demseis.plotting.plot_realism` with the F3 licence
 line under it, and prints the report's Markdown table (what docs/realism.md shows):
@@ -21,7 +21,7 @@ from pathlib import Path
 
 from _field import ATTRIBUTION, FIELD, ROOT  # scripts/_field.py
 
-from demseis.evaluation.realism import realism_report, report_markdown
+from demseis.evaluation.realism_report import realism_report, report_markdown
 from demseis.plotting import plot_realism
 
 

@@ -182,8 +182,8 @@ def _baseline_command(args: argparse.Namespace) -> int:
 def _realism_command(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from demseis.evaluation.realism import (format_report, realism_report, report_json,
-                                            report_markdown)
+    from demseis.evaluation.realism_report import (format_report, realism_report, report_json,
+                                                   report_markdown)
 
     if args.field is not None and not Path(args.field).is_file():
         raise InputError(f"--field {args.field!r} does not exist")

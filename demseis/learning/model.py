@@ -10,7 +10,7 @@ and from the file to the fault probability of any section (a store's, or your SE
 
 Training is :func:`demseis.learning.train.train_unet` on the store's ``train`` runs; the model
 kept is the best on the ``val`` runs, and the metrics are those of the ``test`` runs (never seen
-in training or selection), scored by :func:`demseis.evaluation.scoring.score_store` at a
+in training or selection), scored by :func:`demseis.evaluation.store_scoring.score_store` at a
 tolerance of :data:`TOLERANCE_PX` pixels. The three splits are whole runs
 (:func:`demseis.datasets.split_of_shards`), so a store needs at least three runs. Several
 stores train one model: each is split by its own runs, batches draw from their train runs in
@@ -35,7 +35,8 @@ import numpy as np
 
 from demseis.datasets import FaultSegDataset, open_store, store_layout
 from demseis.errors import InputError, import_torch
-from demseis.evaluation.scoring import SampleCounts, score_store, summarise
+from demseis.evaluation.scoring import SampleCounts, summarise
+from demseis.evaluation.store_scoring import score_store
 from demseis.evaluation.segyfile import is_segy, read_segy_section, write_segy_like
 from demseis.learning.train import build_unet, check_weights, predict_sections, train_unet
 

@@ -6,14 +6,13 @@ import numpy as np
 import pytest
 
 from demseis.errors import InputError
-from demseis.evaluation.realism import (_column_velocity, adjacent_trace_correlation,
-                                        amplitude_spectrum, best_lag, centroid_period,
-                                        choose_samples, dominant_period, excess_kurtosis,
-                                        expected_lags, fault_instances, faults_per_100_traces,
-                                        horizon_roughness, intact_mask, label_fraction,
-                                        local_dips, offset_agreement, peak_period,
-                                        realism_report, spectral_slope, throws_m,
-                                        zero_crossings)
+from demseis.evaluation.realism import (adjacent_trace_correlation, amplitude_spectrum,
+                                        best_lag, centroid_period, dominant_period,
+                                        excess_kurtosis, expected_lags, fault_instances,
+                                        faults_per_100_traces, horizon_roughness, intact_mask,
+                                        label_fraction, local_dips, offset_agreement,
+                                        peak_period, spectral_slope, throws_m, zero_crossings)
+from demseis.evaluation.realism_report import _column_velocity, choose_samples, realism_report
 
 
 def _layered(n_rows: int = 200, n_traces: int = 40, shift=None, seed: int = 0) -> np.ndarray:
@@ -265,7 +264,7 @@ def test_report_of_a_store_of_identical_sinusoid_traces(tmp_path):
 def test_report_of_the_tiny_store(tiny_store):
     import json
 
-    from demseis.evaluation.realism import MEASURES, format_report, report_json
+    from demseis.evaluation.realism_report import MEASURES, format_report, report_json
 
     r = realism_report(tiny_store, max_samples=5, seed=3)
     m = r["store"]["measures"]
@@ -284,7 +283,7 @@ def test_report_of_the_tiny_store(tiny_store):
 
 
 def test_distribution_bins_cover_every_value():
-    from demseis.evaluation.realism import _distribution
+    from demseis.evaluation.realism_report import _distribution
 
     d = _distribution(np.array([1.0, 2.0, 12.3, np.nan]), np.linspace(0.0, 10.0, 41))
     assert sum(d["hist"]["counts"]) == 3 == d["n"] and d["hist"]["edges"][-1] >= 12.3

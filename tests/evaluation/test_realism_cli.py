@@ -21,7 +21,7 @@ def section_sgy(tiny_store, tmp_path_factory):
 
 def test_realism_writes_table_json_markdown_and_figure(tiny_store, section_sgy, tmp_path, capsys):
     from demseis.datasets import read_sample
-    from demseis.evaluation.realism import section_measures
+    from demseis.evaluation.realism_report import section_measures
 
     out = tmp_path / "out"
     assert main(["realism", str(tiny_store), "--field", str(section_sgy), "--out", str(out),

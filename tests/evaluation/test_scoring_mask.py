@@ -16,7 +16,7 @@ from sklearn.metrics import (average_precision_score, f1_score, jaccard_score, p
 import demseis
 from demseis.cli import main
 from demseis.errors import InputError
-from demseis.evaluation.scoring import score_mask
+from demseis.evaluation.store_scoring import score_mask
 from tests.evaluation._helpers import make_store
 
 

@@ -12,7 +12,8 @@ import zarr
 from demseis.errors import InputError, StoreError
 from demseis.cli import main
 from demseis.datasets.read import open_truth
-from demseis.evaluation.scoring import group_rows, score, score_store_counts
+from demseis.evaluation.grouping import group_rows, score_store_counts
+from demseis.evaluation.scoring import score
 from tests.evaluation._helpers import make_store
 
 
