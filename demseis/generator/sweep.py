@@ -446,8 +446,8 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
             return fut
 
         # A bounded window of tasks in flight, refilled as they finish: submitting a 100,000-run
-        # sweep at once took tens of seconds, and so did cancelling it on Ctrl-C (24-34 s
-        # measured); with the window both cost what the few tasks in flight cost.
+        # sweep at once, and cancelling it on Ctrl-C, each cost tens of seconds; with the window
+        # both cost what the few tasks in flight cost.
         queue = iter(enumerate(order))
         window = max(SUBMIT_WINDOW, 4 * len(client.scheduler_info().get("workers", {})))
         running = as_completed([submit(rank, s) for rank, s in itertools.islice(queue, window)])
@@ -533,12 +533,9 @@ def _wait_spawned(n: int, timeout_s: float = 60.0) -> None:
 #: dask's periodic work turned down for a local sweep: a task is one long Numba call that holds
 #: the GIL, so the worker's stack sampler (every 10 ms), the event-loop tick (20 ms) and the
 #: system and nanny memory monitors (the nannies run in the driver) mostly wait for the GIL and
-#: take CPU from the tasks on a small machine. Measured on the 2-core development machine, 8
-#: `quick` runs: the driver's CPU time during a 2-worker sweep fell from 2.5-2.7 s to 1.5-1.9 s
-#: (tick and system monitor only, getrusage, two runs each); 2 workers against 1 with and without
-#: the settings alternating (`benchmarks/sweep.py --repeats 1`, three pairs) 1.73 / 1.89 / 1.81x
-#: against 1.56 / 1.86 / 1.56x, but a later `--repeats 3` gave 1.74x, within the machine's noise.
-#: The settings reach the spawned workers with the config.
+#: take CPU from the tasks on a small machine (the driver's CPU time and the 2-worker speed-up
+#: with and without them: CHANGELOG, "Measured performance"). The settings reach the spawned
+#: workers with the config.
 QUIET_DASK = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.tick.interval": "1s",
