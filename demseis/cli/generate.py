@@ -21,7 +21,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p = sub.add_parser(
         "generate",
         help="run a sweep and write a labelled dataset (resumes an interrupted one)",
-        description="Run every DEM run of a config and write its samples to a sharded Zarr store. "
+        description="Simulate and render every run of a config and write its samples to a sharded Zarr store. "
         "Rerunning the same command on an existing store completes only the missing shards.",
     )
     p.add_argument("config", nargs="?", help="TOML config file (default: the quick preset)")

@@ -158,7 +158,7 @@ def create_store(
     Parameters
     ----------
     path : store directory.
-    n_shards : number of shards = number of DEM runs (>= 1).
+    n_shards : number of shards = number of runs (>= 1).
     samples_per_shard : S, samples per shard (>= 1).
     shape : (H, W) of one sample.
     arrays : sample arrays to create, dict name -> dtype (dtypes must match

@@ -28,9 +28,9 @@ SPLITS = ("train", "val", "test")
 
 def split_of_shards(n_shards: int, fractions: Sequence[float] = (0.8, 0.1, 0.1),
                     seed: int = 0) -> np.ndarray:
-    """Split label (0 train, 1 val, 2 test) of every shard, i.e. of every DEM run.
+    """Split label (0 train, 1 val, 2 test) of every shard, i.e. of every run.
 
-    The shards (one DEM run each) are permuted with ``numpy.random.default_rng(seed)`` and cut
+    The shards (one run each) are permuted with ``numpy.random.default_rng(seed)`` and cut
     at the cumulative fractions: val and test get ``round(f * n_shards)`` shards each (at least
     one when their fraction is positive and there are at least three shards), train the rest.
     It depends only on ``n_shards``, ``fractions`` and ``seed``, not on which shards are done,
@@ -255,7 +255,7 @@ class FaultSegDataset:
         names (``{"noise_kind": "band"}``; an unknown name is an error listing the valid ones),
         numbers may be given as strings (``"inf"``). A filter that selects none of the done
         samples is an error naming it.
-    split : None (every run) or ``"train"``, ``"val"``, ``"test"``: the samples of the DEM runs
+    split : None (every run) or ``"train"``, ``"val"``, ``"test"``: the samples of the runs
         in that split (:func:`split_of_shards`). Splits never share a run.
     split_fractions : (train, val, test) fractions of runs.
     split_seed : seed of the run permutation (fixed: the same store gives the same split).
@@ -363,7 +363,7 @@ class FaultSegDataset:
 
     @property
     def run_ids(self) -> np.ndarray:
-        """(len,) DEM run id of each item (``params/run_id`` if stored, else the shard index)."""
+        """(len,) run id of each item (``params/run_id`` if stored, else the shard index)."""
         if "run_id" in self._params:
             return self._params["run_id"].astype(np.int64)
         return self.indices // self.layout.samples_per_shard

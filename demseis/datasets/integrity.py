@@ -76,7 +76,7 @@ def shard_damage(path: str | Path, k: int, group=None, layout=None, metas=None) 
     """One line per damaged file of shard ``k`` (empty when every checksum holds).
 
     Checks each sample array's shard file (index and every chunk, naming the damaged samples),
-    each parameter's chunk, and each particle array of the shard's DEM run (when stored).
+    each parameter's chunk, and each particle array of the shard's run (when stored: DEM runs).
     A never-written chunk of a sample array or parameter is reported too.
     """
     path = Path(path)

@@ -137,7 +137,7 @@ class StoreLayout:
 
     Attributes
     ----------
-    n_shards : number of shards (one shard = one DEM run).
+    n_shards : number of shards (one shard = one run).
     samples_per_shard : S, samples in every shard.
     shape : (H, W) of one sample (rows = depth, columns = x).
     arrays : sample array name -> dtype, in store order.

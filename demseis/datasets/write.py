@@ -35,7 +35,7 @@ def write_shard(
     *,
     run_id: int | None = None,
 ) -> None:
-    """Write one complete shard (all samples of one DEM run). One task per shard.
+    """Write one complete shard (all samples of one run). One task per shard.
 
     Order: clear the shard's done flag, write every sample array (one shard file each), the
     parameter chunks, the particle snapshots, and set the done flag last. A kill at any point
@@ -52,7 +52,7 @@ def write_shard(
         Integer values must fit the dtype exactly; float values must not be NaN (inf is
         allowed, e.g. ``snr_db = inf`` for noise-free samples).
     particles : the DEM run's snapshots (stored for re-rendering), or None.
-    run_id : the DEM run id, used to name the particles group. Default: ``params["run_id"]``
+    run_id : the run id, used to name the particles group. Default: ``params["run_id"]``
         when that parameter exists (it must then be constant in the shard), else
         ``shard_index``.
 

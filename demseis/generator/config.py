@@ -4,7 +4,7 @@ Layout of a config file (every key optional; defaults are the ``quick`` preset's
 
     name = "my-sweep"
 
-    [sweep]                  # what is sampled, and how many DEM runs
+    [sweep]                  # what is sampled, and how many runs
     seed = 0
     n_runs = 4
     renders_per_snapshot = 1 # extra draws per snapshot for distributions of render parameters
@@ -83,7 +83,7 @@ _OUTPUT_DEFS = _section("output")
 
 @dataclass(frozen=True)
 class SweepSection:
-    """How many DEM runs, the root seed and the spec of every scenario parameter."""
+    """How many runs, the root seed and the spec of every scenario parameter."""
 
     seed: int = _default("seed")
     n_runs: int = _default("n_runs")

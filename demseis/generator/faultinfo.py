@@ -14,7 +14,7 @@ _MAX_FAULTS = 64
 
 def fault_distribution(path: str | Path) -> list[str]:
     """Lines counting the runs of a store by structure, by number of basement faults, and the
-    faults by kind (one count per DEM run: the samples with ``sample_in_run == 0`` of done
+    faults by kind (one count per run: the samples with ``sample_in_run == 0`` of done
     runs). Empty if the store has no fault-system parameters (written before they existed)."""
     # done shards only (no cost per pending run); names the store lacks are skipped
     table = read_done_params(path, ["structure", "n_basement_faults", "sample_in_run",

@@ -10,7 +10,7 @@ forms::
     snr_db  = { dist = "choice", values = [inf, 20, 10] }
     friction = { dist = "truncnormal", mean = 0.4, std = 0.1, low = 0.2, high = 0.6 }
 
-Run-level grids are crossed and cycled over the DEM runs; render-level grids are crossed and
+Run-level grids are crossed and cycled over the runs; render-level grids are crossed and
 all rendered for every snapshot. Distributions are drawn from the run's (or the render's) own
 seeded Generator.
 """

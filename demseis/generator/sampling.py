@@ -89,7 +89,7 @@ class Render:
 
 @dataclass(frozen=True)
 class RunSpec:
-    """Everything one DEM run and its renders need."""
+    """Everything one run (of any engine) and its renders need."""
 
     run: int
     params: dict[str, Any]  # run-level parameter values

@@ -1,4 +1,4 @@
-"""The sweep: every DEM run of a config, one dask task per run, each writing its own shard.
+"""The sweep: every run of a config, one dask task per run, each writing its own shard.
 
 Only this driver creates the store, writes root attributes and consolidates metadata (once, at
 the end); a task writes the array data of exactly one shard, then that shard's done flag. A
@@ -219,7 +219,7 @@ def store_param_specs() -> dict[str, Any]:
 
 
 def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, Any]:
-    """Run DEM run ``shard`` and write its shard. Runs in a dask worker (or in-process).
+    """Simulate and render run ``shard`` and write its shard. Runs in a dask worker (or in-process).
 
     An unstable simulation is returned as an error record (retrying it would fail the same
     way); any other exception propagates so that dask retries the task.
