@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 import warnings
 from collections.abc import Sequence
@@ -92,7 +93,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Ctrl-C is recorded as well as raised: one swallowed where it landed (a __del__, a weakref
     # callback) is raised by the next check of a long loop, or reported below at the latest
     with interrupts.installed():
-        return _main(argv)
+        code = _main(argv)
+    return code
+
+
+def _stdout_closed() -> int:
+    """The reader of our stdout went away (``demseis info S | head -1``): say nothing, send the
+    rest of the output nowhere (so the interpreter's last flush does not fail too), and exit as
+    a program killed by SIGPIPE does (141)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # no real stdout (a test's capture): nothing to redirect
+        pass
+    return 141
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -104,7 +118,10 @@ def _main(argv: Sequence[str] | None) -> int:
             return 2
         code = int(args.func(args) or 0)
         interrupts.raise_if_interrupted()
+        sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
         return code
+    except BrokenPipeError:
+        return _stdout_closed()
     except DemseisError as exc:
         # a store read that failed (a damaged chunk) leaves its sibling reads pending on
         # zarr's event loop: their "Task was destroyed" at exit is noise after the one line

@@ -73,11 +73,12 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 def cmd_generate(args: argparse.Namespace) -> int:
     from demseis.api import WorkersWarning, generate, workers_warning
     from demseis.generator.config import load_config
-    from demseis.generator.sweep import dry_run_plan
+    from demseis.generator.sweep import dry_run_plan, pending_runs
 
     cfg = load_config(args.config, preset=args.preset)
-    if args.dry_run:
-        print("\n".join(dry_run_plan(cfg)))
+    if args.dry_run:  # what this command would compute into --out now (nothing is written)
+        pending, why = pending_runs(cfg, args.out, overwrite=args.overwrite)
+        print("\n".join(dry_run_plan(cfg, pending, why)))
         return 0
     if args.workers is not None and args.scheduler is not None:
         raise InputError("give either --workers or --scheduler, not both")

@@ -39,10 +39,10 @@ class CheckedArray:
                 self._array[int(i)]
             except Exception as one:  # noqa: BLE001 - this sample is the damaged one
                 return StoreError(f"sample {int(i)} of array {self.name!r} in {self.path!r} is "
-                                  f"damaged ({_one_line(one)}); run `demseis validate "
+                                  f"damaged ({read_error_text(one)}); run `demseis validate "
                                   f"{self.path}`")
         return StoreError(f"array {self.name!r} in {self.path!r} is unreadable "
-                          f"({_one_line(cause)}); run `demseis validate {self.path}`")
+                          f"({read_error_text(cause)}); run `demseis validate {self.path}`")
 
     def _check_files(self, samples: Any) -> None:
         """A sample whose shard file is missing reads as fill values through zarr: name it.
@@ -90,7 +90,10 @@ def _rows(samples: Any, n: int) -> np.ndarray:
     return np.flatnonzero(arr) if arr.dtype == bool else arr.astype(np.int64).reshape(-1) % n
 
 
-def _one_line(exc: BaseException) -> str:
-    """``exc`` as one short line (zarr's messages may span lines)."""
+def read_error_text(exc: BaseException) -> str:
+    """A failed chunk read as one short line: a checksum mismatch in words (zarr's message
+    shows the two checksums' raw bytes), anything else as its message on one line."""
     text = " ".join(str(exc).split()) or type(exc).__name__
+    if "checksum do not match" in text:
+        return "crc32c checksum mismatch: its bytes on disk changed since they were written"
     return text if len(text) <= 200 else text[:197] + "..."

@@ -19,7 +19,7 @@ from numcodecs import blosc
 from demseis.datasets._shardio import RawShardReader, raw_shard_layout
 from demseis.datasets.layout import fill_value_for, open_store, store_layout
 from demseis.datasets.status import shard_status
-from demseis.datasets.checked import CheckedArray
+from demseis.datasets.checked import CheckedArray, read_error_text
 from demseis.datasets.table import FullParams, read_done_params, shard_params
 from demseis.errors import InputError, StoreError, import_torch
 
@@ -233,7 +233,7 @@ def read_sample(path: str | Path, index: int, arrays: Sequence[str] | None = Non
             value = arr[index].item()
         except Exception as exc:  # noqa: BLE001
             raise StoreError(f"parameter {name!r} of sample {index} in {str(path)!r} is damaged "
-                             f"({exc}); run `demseis validate {path}`") from exc
+                             f"({read_error_text(exc)}); run `demseis validate {path}`") from exc
         cats = arr.attrs.get("categories")
         params[name] = cats[int(value)] if cats and 0 <= int(value) < len(cats) else value
     return Sample(index, out, params)
@@ -434,7 +434,7 @@ class FaultSegDataset:
                     block = arr[lo:hi]
                 except Exception as exc:  # noqa: BLE001 - checksum mismatch, truncated file
                     raise StoreError(f"samples {lo}..{hi - 1} of array {name!r} in {self.path!r} "
-                                     f"are unreadable ({exc}); run `demseis validate "
+                                     f"are unreadable ({read_error_text(exc)}); run `demseis validate "
                                      f"{self.path}`") from exc
                 rows = wanted - lo
                 lookup = dict(zip(wanted.tolist(), rows.tolist()))

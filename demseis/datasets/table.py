@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from demseis.datasets._shardio import ArrayMeta
+from demseis.datasets.checked import read_error_text
 from demseis.datasets.integrity import read_done_flags
 from demseis.datasets.layout import (
     StoreLayout,
@@ -175,7 +176,7 @@ def _read_through_zarr(path: Path, members: Mapping[str, ArrayMeta]) -> DonePara
         try:
             values[name] = np.asarray(root["params"][name][:])[samples]
         except Exception as exc:  # noqa: BLE001 - a damaged chunk: name it
-            raise StoreError(f"parameter {name!r} of store {str(path)!r} is damaged ({exc}); "
+            raise StoreError(f"parameter {name!r} of store {str(path)!r} is damaged ({read_error_text(exc)}); "
                              f"run `demseis validate {path}`") from None
     metas = {k: m for k, m in params.items() if k in values}
     categories = {k: list(m.categories) for k, m in metas.items() if m.categories is not None}

@@ -67,7 +67,8 @@ class ValidationReport:
             f"{self.path}: {self.n_done}/{self.n_shards} shards done, {pending} pending"
             f" ({len(self.failures)} recorded failures), {self.n_samples_checked} samples checked"
         )
-        return text + (", ok" if self.ok else f", {len(self.problems)} problems")
+        n = len(self.problems)
+        return text + (", ok" if self.ok else f", {n} problem{'' if n == 1 else 's'}")
 
 
 def _check_array(name: str, values: np.ndarray, shard: int, s0: int) -> list[str]:

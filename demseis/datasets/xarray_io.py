@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from demseis.datasets.checked import read_error_text
 from demseis.datasets.layout import open_store, store_layout
 from demseis.datasets.status import shard_status
 from demseis.errors import DemseisError, StoreError
@@ -75,7 +76,7 @@ def to_xarray(path: str | Path) -> Any:
             try:
                 values = np.asarray(var.values)
             except Exception as exc:  # noqa: BLE001 - a chunk failing its checksum
-                raise StoreError(f"parameter {name!r} of store {str(path)!r} is damaged ({exc}); "
+                raise StoreError(f"parameter {name!r} of store {str(path)!r} is damaged ({read_error_text(exc)}); "
                                  "run `demseis validate` to list the damaged shards") from exc
             cats = var.attrs.get("categories")
             if cats:

@@ -278,8 +278,17 @@ def baseline_store(store: Any, out: str, *, method: str = "dip", array: str = "s
         done_iter: Any = tqdm(done, desc="baseline", unit="sample", file=sys.stderr)
     else:
         done_iter = done
-    for i in done_iter:
-        dest[int(i)] = detect(np.asarray(seis[int(i)]))
+    partial = out + (".part.npy" if out.endswith(".npy") else ".part")
+    try:
+        for i in done_iter:
+            dest[int(i)] = detect(np.asarray(seis[int(i)]))
+    except BaseException:  # a damaged chunk, Ctrl-C: no half-written output is left behind
+        del dest
+        if os.path.isdir(partial):
+            shutil.rmtree(partial, ignore_errors=True)
+        elif os.path.exists(partial):
+            os.remove(partial)
+        raise
     if isinstance(dest, np.memmap):  # a new memmap is zero-filled: skipped samples stay 0
         dest.flush()
         del dest

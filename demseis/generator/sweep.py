@@ -74,6 +74,8 @@ class SweepSummary:
     #: runs written now that went unstable and finished on a stabilised try: run -> its
     #: ``dem_attempt`` (demseis.generator.engines.dem.STABILISED_TRIES)
     stabilised: dict[int, int] = field(default_factory=dict)
+    #: runs marked done whose shard failed its checksums, so the sweep computes them again
+    damaged: list[int] = field(default_factory=list)
     seconds: float = 0.0
     #: seconds from the first task submitted to the last finished (no cluster start-up)
     compute_seconds: float = 0.0
@@ -97,6 +99,12 @@ class SweepSummary:
             f"time: {self.seconds:.1f} s"
             + (f", {self.n_samples_written / self.seconds:.2f} samples/s" if self.seconds > 0 and self.completed else ""),
         ]
+        if self.damaged:
+            redone = sorted(set(self.damaged) & set(self.completed))
+            out.append(f"{len(self.damaged)} done run(s) failed their checksums and were "
+                       f"computed again: {', '.join(map(str, sorted(self.damaged)))}"
+                       + ("" if len(redone) == len(self.damaged) else
+                          f" ({len(redone)} of them written now)"))
         if self.no_fault:
             out.append(f"{len(self.no_fault)} run(s) ended with no fault (no fault pixel in the "
                        "last snapshot): " + ", ".join(str(r) for r in sorted(self.no_fault)))
@@ -146,6 +154,36 @@ def _first_difference(a: Any, b: Any, path: str = "") -> str | None:
                 return d
         return None
     return None if a == b else path.rstrip(".")
+
+
+def pending_runs(cfg: Config, out: str | Path, *, overwrite: bool = False) -> tuple[int, str]:
+    """How many runs ``generate`` would compute into ``out`` now, and why, without writing.
+
+    All of them for a new store or with ``overwrite``; the runs not yet done in a store of
+    this config (a done shard that is damaged counts as pending, as the sweep redoes it).
+
+    Raises
+    ------
+    ConfigError
+        ``out`` holds a store written with another config (as ``generate`` would).
+    StoreError
+        ``out`` exists and is not a demseis store.
+    """
+    out = Path(out)
+    n = cfg.sweep.n_runs
+    if overwrite or not out.exists():
+        return n, "a new store" if not out.exists() else "--overwrite replaces the store"
+    if root_metadata_lost(out):
+        return n, "the store's root metadata is lost: its done runs are checked when it is rebuilt"
+    stored = json.loads(json.dumps(read_store_attrs(out).get("config")))
+    new = json.loads(json.dumps(store_attrs(cfg)["config"]))
+    if stored != new:
+        diff = _first_difference(stored, new) or "config"
+        raise ConfigError(
+            f"store {str(out)!r} was written with a different config (first difference: "
+            f"{diff}); use --overwrite to replace it, or choose another --out")
+    status = shard_status(out, verify=True)
+    return int(np.count_nonzero(status != 1)), f"{int(np.count_nonzero(status == 1))} done in {out}"
 
 
 def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> np.ndarray:
@@ -278,8 +316,9 @@ def human_bytes(n: float) -> str:
     return f"{n:,.0f} {units[k]}" if k == 0 else f"{n:,.1f} {units[k]}"
 
 
-def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
-    """Human lines describing the sweep without computing it."""
+def dry_run_plan(cfg: Config, pending: int | None = None, why: str = "") -> list[str]:
+    """Human lines describing the sweep without computing it: ``pending`` runs of the
+    config's (default all; :func:`pending_runs` of an existing store), ``why`` said beside."""
     grid = grid_of(cfg)
     S = cfg.samples_per_run
     n_runs = cfg.sweep.n_runs if pending is None else pending
@@ -289,7 +328,8 @@ def dry_run_plan(cfg: Config, pending: int | None = None) -> list[str]:
     what, secs = engine.describe(cfg)
     return [
         f"config: {cfg.name} (seed {cfg.sweep.seed})",
-        f"{cfg.model.engine} runs: {n_runs} to compute (of {cfg.sweep.n_runs}); {what}",
+        f"{cfg.model.engine} runs: {n_runs} to compute (of {cfg.sweep.n_runs}"
+        + (f"; {why}" if why else "") + f"); {what}",
         f"samples: {n_runs * S} ({cfg.model.n_snapshots} snapshots x "
         f"{cfg.renders_per_run_snapshot} renders per run)",
         f"sample shape: {h} x {w} ({cfg.output.domain} domain; {grid.cell_m:g} m cells); arrays: "
@@ -346,6 +386,9 @@ def _run_sweep(
     pending = [int(i) for i in np.flatnonzero(status != 1)]
     summary = SweepSummary(store=str(out), n_shards=len(status), samples_per_shard=cfg.samples_per_run,
                            done_before=len(status) - len(pending))
+    if pending and summary.done_before < len(status):  # flags set on shards that failed checks
+        flagged = shard_status(out)
+        summary.damaged = [int(i) for i in np.flatnonzero((flagged == 1) & (status != 1))]
     summary.phase_seconds["prepare"] = time.perf_counter() - t0
     cfg_dict = cfg.to_dict()
     bar = _progress_bar(len(pending) * cfg.samples_per_run, progress and bool(pending))

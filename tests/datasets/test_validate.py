@@ -65,7 +65,8 @@ def test_damage_is_reported(tmp_path, capsys, pristine, damage, expected):
     assert any(__import__("re").search(expected, p) for p in report.problems), report.problems
     assert main(["validate", str(path)]) == 1
     out = capsys.readouterr().out
-    assert "problems" in out.splitlines()[-1]
+    n = len(report.problems)
+    assert out.splitlines()[-1].endswith(f", {n} problem{'' if n == 1 else 's'}")
 
 
 def test_done_flag_on_never_written_shard(tmp_path):

@@ -161,3 +161,26 @@ def test_dip_attribute_reads_reflector_dip():
         assert np.median(p) == pytest.approx(expect, abs=0.15)
     with pytest.raises(InputError, match="dip_scale"):
         dip_fault_probability(u, dip_scale=0)
+
+
+@pytest.mark.parametrize("suffix", [".npy", ".zarr"])
+def test_cli_baseline_on_a_damaged_store_leaves_nothing_behind(tiny_store, tmp_path, capsys,
+                                                               suffix):
+    """issue 38: a sample whose chunk fails its checksum stops `baseline` with one line, and
+    neither the output nor its ``.part`` file is left behind."""
+    import shutil
+
+    store = tmp_path / "s.zarr"
+    shutil.copytree(tiny_store, store)
+    shard = store / "seismic" / "c" / "1" / "0" / "0"       # shard 1: 6 raw inner chunks
+    data = bytearray(shard.read_bytes())
+    index = np.frombuffer(bytes(data[-(6 * 16 + 4):-4]), dtype="<u8").reshape(6, 2)
+    data[int(index[2, 0]) + int(index[2, 1]) // 2] ^= 0x10   # a bit in sample 8's values
+    shard.write_bytes(bytes(data))
+    out = tmp_path / f"base{suffix}"
+    assert main(["baseline", str(store), "--out", str(out)]) != 0
+    err = capsys.readouterr().err
+    # the checksum mismatch in words, not zarr's raw bytes (issue 38)
+    assert len(err.strip().splitlines()) == 1 and "crc32c checksum mismatch" in err, err
+    assert "b'" not in err and "Stored:" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr"]

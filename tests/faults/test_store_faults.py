@@ -168,4 +168,6 @@ def test_bit_flip_in_a_done_shard_is_regenerated_by_resume(tmp_path, reference, 
     res = _run(cfg, out)
     assert res.returncode == 0, res.stderr
     assert "3 already done, 1 written now" in res.stdout
+    if target != "shard_done/c/1":  # a flag that fails its check reads as not done
+        assert "1 done run(s) failed their checksums and were computed again: 1" in res.stdout
     assert digest(out) == digest(ref)

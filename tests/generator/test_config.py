@@ -136,3 +136,21 @@ def test_file_without_preset_layers_on_quick(tmp_path):
     assert cfg.sweep.n_runs == 30 and cfg.sweep.seed == 1
     assert cfg.sweep.params == quick.sweep.params
     assert cfg.model == quick.model and cfg.samples_per_run == quick.samples_per_run == 12
+
+
+def test_generate_help_names_every_preset_and_every_file_is_a_preset(capsys):
+    """issue 38: `generate --help` named four of the six presets; it names each one, and the
+    presets folder holds exactly PRESETS."""
+    from importlib import resources
+
+    from demseis.cli import main
+
+    with pytest.raises(SystemExit):
+        main(["generate", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    listed = text.split("built-in preset:")[1].split("(")[0]
+    assert [p.strip(" ,") for p in listed.replace(" or ", ", ").split(",") if p.strip(" ,")] \
+        == list(PRESETS)
+    folder = resources.files("demseis.generator") / "presets"
+    assert sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml")) \
+        == sorted(PRESETS)

@@ -131,8 +131,28 @@ def test_dry_run_writes_nothing(tmp_path, capsys):
     out = tmp_path / "d.zarr"
     assert main(["generate", "--preset", "quick", "--out", str(out), "--dry-run"]) == 0
     text = capsys.readouterr().out
-    assert "dem runs: 4" in text and "samples: 48" in text and "estimated time" in text and "MiB" in text
+    assert "dem runs: 4 to compute (of 4; a new store)" in text and "samples: 48" in text and "estimated time" in text and "MiB" in text
     assert not out.exists()
+
+
+def test_dry_run_counts_only_what_a_partly_done_store_lacks(tiny_store, tmp_path, capsys):
+    """issue 38: the plan of a store with 2 of its 3 runs done says 1 run to compute; another
+    config is refused as generate refuses it; --overwrite plans all of them. Nothing is written."""
+    import shutil
+
+    out = tmp_path / "t.zarr"
+    shutil.copytree(tiny_store, out)
+    (out / "shard_done" / "c" / "1").unlink()           # run 1 not done (its flag chunk gone)
+    before = tree_bytes(out)
+    assert main(["generate", "--preset", "tiny", "--out", str(out), "--dry-run"]) == 0
+    text = capsys.readouterr().out
+    assert f"dem runs: 1 to compute (of 3; 2 done in {out})" in text and "samples: 6 " in text
+    assert main(["generate", "--preset", "tiny", "--out", str(out), "--dry-run",
+                 "--overwrite"]) == 0
+    assert "dem runs: 3 to compute (of 3; --overwrite replaces the store)" in capsys.readouterr().out
+    assert main(["generate", "--preset", "quick", "--out", str(out), "--dry-run"]) == 2
+    assert "different config" in capsys.readouterr().err
+    assert tree_bytes(out) == before
 
 
 def test_info(tiny_store, capsys):
