@@ -31,6 +31,12 @@ from demseis.seismic import (element_properties, imaging_mode, property_grids, r
 from demseis.types import Snapshot
 
 
+
+def noise_title(snr_db: float, kind: str) -> str:
+    """How a sample's noise reads in a title: ``SNR 10 dB (white)``, or ``no noise``."""
+    snr = float(snr_db)
+    return "no noise" if not np.isfinite(snr) else f"SNR {snr:.3g} dB ({kind})"
+
 def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot]]:
     path = Path(source)
     if path.is_dir():
@@ -242,8 +248,8 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     fig, axes = plt.subplots(1, 3, figsize=(16, 1.3 + 16 / 3 * height_ratio), sharey=True,
                              layout="constrained")
     axes[0].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect=aspect)
-    axes[0].set_title(f"seismic: {float(p['freq_hz']):.3g} Hz, SNR {float(p['snr_db']):.3g} dB "
-                      f"({noise}){imaging}")
+    axes[0].set_title(f"seismic: {float(p['freq_hz']):.3g} Hz, {noise_title(p['snr_db'], noise)}"
+                      f"{imaging}")
     axes[1].imshow(sec, cmap="gray", vmin=-clip, vmax=clip, extent=extent, aspect=aspect)
     if "fault_id" in root:  # slip-trace labels: one colour per fault instance
         fid = np.asarray(root["fault_id"][index]).astype(float)

@@ -24,6 +24,7 @@ import os
 import sys
 import warnings
 from collections.abc import Sequence
+from typing import NoReturn
 
 from demseis import __version__, interrupts
 from demseis.errors import DemseisError
@@ -33,13 +34,21 @@ from demseis.errors import DemseisError
 WRITING_COMMANDS = frozenset({"generate", "render", "relabel"})
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser whose usage errors are one line (exit 2), as every other bad input;
+    the subcommands' parsers are of this class too (argparse makes them of the parent's)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser with every subpackage's subcommands registered."""
     # imported here so that main() also turns a Ctrl-C during these imports into its message
     from demseis.cli import bench as bench_cli
     from demseis.cli import evaluate, generate, model, plots, store
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="demseis",
         description="Labelled synthetic seismic from discrete-element fault models.",
     )

@@ -24,6 +24,7 @@ Every key is validated: an unknown key, a wrong type or an out-of-range value ra
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -164,15 +165,33 @@ def _cross(specs: dict[str, Spec]) -> list[dict[str, Any]]:
 
 # ---- parsing -----------------------------------------------------------------------
 
+def unknown_key(where: str, key: str, allowed: Any) -> ConfigError:
+    """The error for ``where.key`` that is not a key of ``where``: the closest allowed keys
+    ("did you mean"), the section a known key belongs to, and the list itself where it is
+    short (``demseis params`` prints the long ones)."""
+    allowed = sorted(allowed)
+    close = difflib.get_close_matches(key, allowed, n=3, cutoff=0.75)
+    text = f"{where}.{key}: unknown key"
+    home = PARAMS[key].section if key in PARAMS else None
+    if home and home != where:
+        text += f"; it belongs in [{home}]"
+    elif close:
+        text += "; did you mean " + " or ".join(repr(c) for c in close) + "?"
+    if len(allowed) <= 12:
+        text += "; allowed keys are " + ", ".join(allowed)
+    else:
+        lists = "docs/labels.md" if where == "labels" else "`demseis params`"
+        text += f" ({len(allowed)} keys are allowed there: {lists} lists them)"
+    return ConfigError(text)
+
+
 def _parse_table(raw: Any, defs: dict[str, Param], where: str) -> dict[str, Any]:
     if not isinstance(raw, dict):
         raise ConfigError(f"[{where}] must be a table, got {type(raw).__name__}")
     out = {}
     for key, value in raw.items():
         if key not in defs:
-            raise ConfigError(
-                f"{where}.{key}: unknown key; allowed keys are " + ", ".join(sorted(defs))
-            )
+            raise unknown_key(where, key, defs)
         if isinstance(value, (list, dict)):
             raise ConfigError(
                 f"{where}.{key} = {value!r}: must be a single value (only [sweep] parameters "
@@ -191,7 +210,7 @@ def _dataclass_table(cls: type, raw: Any, where: str) -> Any:
     kwargs = {}
     for key, value in raw.items():
         if key not in fields:
-            raise ConfigError(f"{where}.{key}: unknown key; allowed keys are " + ", ".join(sorted(fields)))
+            raise unknown_key(where, key, fields)
         default = getattr(defaults, key)
         kwargs[key] = _coerce_like(default, value, f"{where}.{key}")
     obj = cls(**kwargs)
@@ -250,7 +269,10 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
     allowed_top = {"name", "sweep", "model", "grid", "labels", "output", "properties", "plugins"}
     for key in raw:
         if key not in allowed_top:
-            raise ConfigError(f"{key}: unknown top-level key; allowed are " + ", ".join(sorted(allowed_top)))
+            close = difflib.get_close_matches(key, sorted(allowed_top), n=1, cutoff=0.75)
+            raise ConfigError(f"{key}: unknown top-level key"
+                              + (f"; did you mean {close[0]!r}?" if close else "")
+                              + "; allowed are " + ", ".join(sorted(allowed_top)))
     plugins = _load_plugins(raw.get("plugins", []))  # first: they may add engines, modes, arrays
     name = raw.get("name", "demseis")
     if not isinstance(name, str) or not name:
@@ -267,10 +289,7 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
         if key in _SWEEP_DEFS:
             continue
         if key not in pdefs:
-            raise ConfigError(
-                f"sweep.{key}: unknown key; allowed keys are "
-                + ", ".join(sorted(set(pdefs) | set(_SWEEP_DEFS)))
-            )
+            raise unknown_key("sweep", key, set(pdefs) | set(_SWEEP_DEFS))
         specs[key] = parse_spec(pdefs[key], value, f"sweep.{key}")
     for key, pdef in pdefs.items():
         specs.setdefault(key, Fixed(pdef.default))
@@ -299,7 +318,7 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
         if key in scalar_props:
             raise ConfigError(f"properties.{key}: set scalar property parameters in [sweep] ({key} = ...)")
         if key not in prop_fields:
-            raise ConfigError(f"properties.{key}: unknown key; allowed keys are " + ", ".join(sorted(prop_fields)))
+            raise unknown_key("properties", key, prop_fields)
         properties[key] = _coerce_like(getattr(prop_defaults, key), value, f"properties.{key}")
     for key in sorted(prop_fields):
         properties.setdefault(key, getattr(prop_defaults, key))

@@ -255,14 +255,20 @@ def load_model(path: str | Path, device: str | None = None) -> Any:
     torch = import_torch("demseis predict")
     if not os.path.isfile(path):
         raise InputError(f"model {str(path)!r} does not exist")
+    not_model = InputError(f"model {str(path)!r} is not a demseis model (made by demseis train)")
     try:
         blob = torch.load(str(path), map_location="cpu", weights_only=True)
-    except Exception as exc:  # noqa: BLE001 - any unreadable file is the same user error
-        raise InputError(f"model {str(path)!r}: cannot read ({type(exc).__name__})") from None
+    except OSError as exc:  # permissions, a directory: the file itself cannot be read
+        raise InputError(f"model {str(path)!r}: cannot read ({exc.strerror or exc})") from None
+    except Exception:  # noqa: BLE001 - not a torch file, truncated, another pickle: not a model
+        raise not_model from None
     if not isinstance(blob, dict) or blob.get("format") != FORMAT:
-        raise InputError(f"model {str(path)!r} is not a demseis model (made by demseis train)")
-    model = build_unet(int(blob["base"]))
-    model.load_state_dict(blob["state_dict"])
+        raise not_model
+    try:
+        model = build_unet(int(blob["base"]))
+        model.load_state_dict(blob["state_dict"])
+    except (KeyError, TypeError, ValueError, RuntimeError):  # its format key but not its weights
+        raise not_model from None
     dev = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
     model.to(dev).eval()
     model.demseis_metrics = blob.get("metrics", {})

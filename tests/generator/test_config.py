@@ -154,3 +154,22 @@ def test_generate_help_names_every_preset_and_every_file_is_a_preset(capsys):
     folder = resources.files("demseis.generator") / "presets"
     assert sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml")) \
         == sorted(PRESETS)
+
+
+@pytest.mark.parametrize("raw, message", [
+    ({"sweep": {"dip_degs": 50}}, "sweep.dip_degs: unknown key; did you mean 'dip_deg'? (64 keys"),
+    ({"sweep": {"engine": "dem"}}, "sweep.engine: unknown key; it belongs in [model] ("),
+    ({"model": {"widht_m": 100.0}}, "model.widht_m: unknown key; did you mean 'width_m'?; allowed "
+                                    "keys are engine, height_m,"),
+    ({"labels": {"fault_stlye": "picks"}}, "labels.fault_stlye: unknown key; did you mean "
+                                           "'fault_style'? (33 keys are allowed there: "
+                                           "docs/labels.md lists them)"),
+    ({"swep": {}}, "swep: unknown top-level key; did you mean 'sweep'?; allowed are grid,"),
+])
+def test_a_mistyped_key_gets_did_you_mean_not_a_list_of_every_key(raw, message):
+    """issue 38: a mistyped [sweep] key listed all ~1,000 characters of keys; now the closest
+    key, or the section a known key belongs in, and short lists only."""
+    with pytest.raises(ConfigError) as err:
+        parse_config(raw)
+    text = str(err.value)
+    assert text.startswith(message) and len(text) < 200, text

@@ -121,6 +121,30 @@ def test_predict_errors(tmp_path, capsys):
         predict_array(None, np.zeros(5))
 
 
+def test_a_file_that_is_not_a_model_says_so(tmp_path):
+    """issue 38: every kind of file that is not a model (text, an empty file, a pickle of
+    something else, a torch file of other tensors, one with the format key but no weights)
+    gives the same one line, not the name of the exception torch raised inside."""
+    import pickle
+
+    import torch
+
+    files = {"text.pt": b"not a model at all", "empty.pt": b"",
+             "pickle.pt": pickle.dumps({"a": 1})}
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+    torch.save({"w": torch.zeros(3)}, tmp_path / "tensors.pt")
+    torch.save({"format": "demseis-unet-1", "base": 4}, tmp_path / "noweights.pt")
+    from demseis.learning.model import FORMAT
+
+    torch.save({"format": FORMAT, "base": 4, "state_dict": {"w": torch.zeros(3)}},
+               tmp_path / "wrongweights.pt")
+    for f in sorted(tmp_path.iterdir()):
+        with pytest.raises(InputError) as err:
+            load_model(f, "cpu")
+        assert str(err.value) == f"model {str(f)!r} is not a demseis model (made by demseis train)"
+
+
 @pytest.mark.slow
 def test_generate_train_predict_score_on_quick(tmp_path, capsys):
     store = tmp_path / "quick.zarr"
