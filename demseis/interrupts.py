@@ -26,6 +26,12 @@ from types import FrameType
 from typing import Any
 
 _state = {"pending": False}
+
+
+class Finished(KeyboardInterrupt):
+    """A Ctrl-C that came after the interrupted work had completed (a sweep whose every run
+    was written and whose store was finalized): there is nothing to resume."""
+
 _previous_hook: list[Any] = []
 
 
@@ -85,14 +91,16 @@ def watched() -> Iterator[None]:
     """The recording handler for a block of library work where the process uses Python's
     default one (the library called from a script); a swallowed Ctrl-C is raised at the block's
     end at the latest. Where another handler is in place (the CLI's, which is this one, or a
-    notebook's), it only adds the check at the end."""
+    notebook's), it only adds the check at the end: a Ctrl-C swallowed in a block that then
+    completed is raised as :class:`Finished`."""
     ours = signal.getsignal(signal.SIGINT) is signal.default_int_handler
     with contextlib.ExitStack() as stack:
         if ours:
             ours = stack.enter_context(installed())
         try:
             yield
-            raise_if_interrupted()
+            if interrupted():  # swallowed, and the block's work completed all the same
+                raise Finished
         except KeyboardInterrupt:
             if ours:  # the CLI marks its own handled where it reports it
                 clear()

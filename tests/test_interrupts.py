@@ -13,7 +13,7 @@ import time
 import pytest
 
 from demseis import interrupts
-from tests.faults._helpers import INTERRUPTED, ROOT, done_shards
+from tests.faults._helpers import FINISHED, INTERRUPTED, ROOT, done_shards
 
 
 class _SigintInDel:
@@ -95,7 +95,7 @@ def test_other_unraisable_errors_are_still_reported(monkeypatch):
 
 
 def test_watched_raises_a_swallowed_ctrl_c_at_its_end_and_restores():
-    with pytest.raises(KeyboardInterrupt), interrupts.watched():
+    with pytest.raises(interrupts.Finished), interrupts.watched():   # the block completed
         swallow_sigint()
     assert not interrupts.interrupted()
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
@@ -161,3 +161,35 @@ def test_cli_sweep_with_workers_stops_soon_after_a_swallowed_ctrl_c(tmp_path):
     swallowed_at = float(lines[0].split()[1])
     assert t_end - swallowed_at < 30.0  # cluster shut-down included; the sweep needs minutes
     assert 1 <= done_shards(out) < 2000
+
+
+#: a CLI run that receives Ctrl-C while it finalizes the store, after every run was written
+_FINALIZE_SCRIPT = """
+import os, signal, sys
+sys.path.insert(0, {root!r})
+import demseis.generator.sweep as sweep
+real = sweep.finalize_store
+def finalize(out):
+    os.kill(os.getpid(), signal.SIGINT)
+    real(out)
+sweep.finalize_store = finalize
+from demseis.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_ctrl_c_after_every_run_is_written_says_nothing_to_resume(tmp_path):
+    """issue 38: a Ctrl-C after all shards were written said "run the same command to
+    resume"; the store is complete and finalized, and the line says so."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[sweep]\nn_runs = 1\n")
+    out = tmp_path / "s.zarr"
+    proc = subprocess.run([sys.executable, "-c", _FINALIZE_SCRIPT.format(root=str(ROOT)),
+                           "generate", str(cfg), "--preset", "tiny", "--out", str(out),
+                           "--workers", "0", "--quiet"], capture_output=True, text=True,
+                          cwd=ROOT, timeout=300)
+    assert proc.returncode == 130, proc.stderr[-3000:]
+    assert proc.stderr.strip() == FINISHED
+    from demseis.datasets import validate_store
+
+    assert done_shards(out) == 1 and validate_store(out).ok

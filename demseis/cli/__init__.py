@@ -126,7 +126,8 @@ def _main(argv: Sequence[str] | None) -> int:
             parser.print_help()
             return 2
         code = int(args.func(args) or 0)
-        interrupts.raise_if_interrupted()
+        if interrupts.interrupted():  # swallowed where it landed, and the command completed
+            raise interrupts.Finished
         sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
         return code
     except BrokenPipeError:
@@ -141,13 +142,16 @@ def _main(argv: Sequence[str] | None) -> int:
         where = exc.filename if exc.filename is not None else _path_arg(locals().get("args"))
         print(f"demseis: error: {where}: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         interrupts.clear()
         # an interrupted zarr call leaves a task on zarr's event loop. What was written is
         # consistent (a shard counts only once its done flag is set), so that is noise.
         _quiet_pending_tasks()
         command = getattr(locals().get("args"), "command", None)
-        if command in WRITING_COMMANDS:
+        if isinstance(exc, interrupts.Finished):
+            print("demseis: interrupted after the work was done: nothing to resume",
+                  file=sys.stderr)
+        elif command in WRITING_COMMANDS:
             print("demseis: interrupted; run the same command to resume", file=sys.stderr)
         else:  # a read-only command has nothing to resume
             print("demseis: interrupted", file=sys.stderr)

@@ -411,7 +411,8 @@ def _run_sweep(
         if remote is not None and not pending:
             remote.close()
     t_fin = time.perf_counter()
-    with _sigint_deferred():
+    # every run was written (none failed): a Ctrl-C now leaves nothing to resume
+    with _sigint_deferred(KeyboardInterrupt if summary.failed else interrupts.Finished):
         record_failures(out, summary.failed)
         finalize_store(out)
     summary.phase_seconds["finalize"] = time.perf_counter() - t_fin
@@ -540,8 +541,9 @@ def _quiet_dask_logs() -> None:
 
 
 @contextlib.contextmanager
-def _sigint_deferred() -> Any:
-    """Hold SIGINT in the main thread for the block; one that arrived is raised at its end."""
+def _sigint_deferred(raises: type[KeyboardInterrupt] = KeyboardInterrupt) -> Any:
+    """Hold SIGINT in the main thread for the block; one that arrived is raised at its end (as
+    ``raises``: :class:`demseis.interrupts.Finished` where the block completes the work)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -552,7 +554,7 @@ def _sigint_deferred() -> Any:
     finally:
         signal.signal(signal.SIGINT, old)
     if got:
-        raise KeyboardInterrupt
+        raise raises
 
 
 def _wait_spawned(n: int, timeout_s: float = 60.0) -> None:

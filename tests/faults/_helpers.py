@@ -13,9 +13,11 @@ from pathlib import Path
 
 from tests._helpers import ROOT
 
-__all__ = ["INTERRUPTED", "ROOT", "dask_workers", "done_shards", "interrupt", "spawn", "wait_for"]
+__all__ = ["FINISHED", "INTERRUPTED", "ROOT", "dask_workers", "done_shards", "interrupt", "spawn", "wait_for"]
 
 INTERRUPTED = "demseis: interrupted; run the same command to resume"
+#: the line of a Ctrl-C that came after every run was written and the store finalized
+FINISHED = "demseis: interrupted after the work was done: nothing to resume"
 
 
 def spawn(args: list[str], env: dict[str, str] | None = None) -> subprocess.Popen:
