@@ -287,6 +287,100 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     return out
 
 
+def otsu_threshold(values: np.ndarray, bins: int = 256) -> float:
+    """Otsu's threshold of ``values`` in [0, 1]: the cut of their histogram that maximises the
+    between-class variance (what a prediction's own probabilities say separates fault from
+    background); 0.5 where the values are all equal."""
+    v = np.asarray(values, np.float64).ravel()
+    v = v[np.isfinite(v)]
+    if v.size == 0 or v.min() == v.max():
+        return 0.5
+    hist, edges = np.histogram(v, bins=bins, range=(0.0, 1.0))
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    w0 = np.cumsum(hist)[:-1].astype(np.float64)
+    w1 = v.size - w0
+    m0 = np.cumsum(hist * centres)[:-1]
+    total = float((hist * centres).sum())
+    with np.errstate(divide="ignore", invalid="ignore"):
+        between = w0 * w1 * (m0 / w0 - (total - m0) / w1) ** 2
+    between[~np.isfinite(between)] = -1.0
+    return float(edges[1:-1][int(np.argmax(between))])
+
+
+def plot_section(section: str | Path, out: str | Path, *, pred: str | Path | None = None,
+                 labels: str | Path | None = None, threshold: float | None = None) -> Path:
+    """A section from a file (SEG-Y, ``.npy`` or ``.png``), with a fault prediction over it
+    (``pred``: probabilities in [0, 1], the same shape) and a hand-picked mask
+    (``labels``: ``.npy``, ``.png`` or SEG-Y), each in its own panel.
+
+    The prediction is drawn where it reaches ``threshold``: by default Otsu's threshold of its
+    own probabilities (:func:`otsu_threshold`), named in the title, so that a model whose
+    probabilities run low still shows its faults; the colour is the probability.
+
+    Raises
+    ------
+    InputError
+        A file that cannot be read as a section or mask, or whose shape differs from the
+        section's, or a threshold outside (0, 1).
+    """
+    import matplotlib  # lazy: see the module docstring
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # lazy: see the module docstring
+
+    from demseis.evaluation.fieldio import read_mask, read_section
+
+    sec = read_section(section)
+    # (title, what is drawn over the section, the probability it is drawn from; None: a mask)
+    panels: list[tuple[str, np.ndarray | None, float | None]] = [
+        (f"section: {Path(section).name}", None, None)]
+    if pred is not None:
+        prob = read_section(pred)
+        _same_shape(prob, sec, "--pred", pred)
+        if prob.min() < 0 or prob.max() > 1:
+            raise InputError(f"--pred {str(pred)!r}: values {prob.min():.3g}..{prob.max():.3g} "
+                             "are not probabilities in [0, 1]")
+        if threshold is not None and not 0 < threshold < 1:
+            raise InputError(f"--threshold {threshold!r}: expected a probability in (0, 1)")
+        t = otsu_threshold(prob) if threshold is None else float(threshold)
+        share = float((prob >= t).mean())
+        how = "Otsu of its probabilities" if threshold is None else "given"
+        panels.append((f"prediction >= {t:.2f} ({how}; {100 * share:.1f} % of pixels)", prob, t))
+    if labels is not None:
+        mask = read_mask(labels)
+        _same_shape(mask, sec, "--labels", labels)
+        panels.append((f"picked faults: {Path(labels).name}", mask.astype(np.float32), None))
+    clip = float(np.percentile(np.abs(sec - np.median(sec)), 99)) or 1.0
+    centre = float(np.median(sec))
+    n = len(panels)
+    h, w = sec.shape
+    fig, axes = plt.subplots(1, n, figsize=(5.5 * n, 1.2 + 5.5 * min(h / w, 2.0)), sharey=True,
+                             layout="constrained", squeeze=False)
+    for ax, (title, over, drawn_from) in zip(axes[0], panels):
+        ax.imshow(sec, cmap="gray", vmin=centre - clip, vmax=centre + clip, aspect="auto",
+                  interpolation="nearest")
+        if over is not None and drawn_from is None:
+            ax.imshow(np.ma.masked_equal(over, 0), cmap="autumn", vmin=0, vmax=1, aspect="auto",
+                      interpolation="nearest")
+        elif over is not None:
+            im = ax.imshow(np.ma.masked_less(over, drawn_from), cmap="inferno", vmin=0.0,
+                           vmax=1.0, aspect="auto", interpolation="nearest", alpha=0.85)
+            fig.colorbar(im, ax=ax, shrink=0.8, label="fault probability")
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel("trace")
+    axes[0][0].set_ylabel("sample")
+    out = Path(out)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def _same_shape(a: np.ndarray, sec: np.ndarray, flag: str, path: str | Path) -> None:
+    if a.shape != sec.shape:
+        raise InputError(f"{flag} {str(path)!r} has shape {a.shape}, the section "
+                         f"{sec.shape}: they must be the same grid")
+
+
 def plot_snapshots(snaps: Sequence[Snapshot], path: str | os.PathLike, *, n_groups: int = 6,
                    layers_per_group: int | None = None, ncols: int = 2, dpi: int = 110,
                    title: str | None = None) -> None:

@@ -61,6 +61,9 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.add_argument("--device", default=None,
                    help="cpu, cuda, cuda:1 ... (default: CUDA when available)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    p.add_argument("--png", default=None,
+                   help="also draw the section with the prediction over it (as demseis plot "
+                   "SECTION --pred OUT does) into this PNG")
     p.set_defaults(func=_predict_command)
 
 
@@ -93,4 +96,8 @@ def _predict_command(args: argparse.Namespace) -> int:
     out = predict(args.model, args.input, args.out, device=args.device,
                   overwrite=args.overwrite)
     print(f"wrote {out}")
+    if args.png is not None:
+        from demseis.plotting import plot_section
+
+        print(f"wrote {plot_section(args.input, args.png, pred=out)}")
     return 0

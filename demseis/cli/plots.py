@@ -18,9 +18,20 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.add_argument("--run", type=nonneg_int, default=0, help="run index (default 0)")
     p.set_defaults(func=cmd_preview)
 
-    p = sub.add_parser("plot", help="PNG of one stored sample: section, fault label, damage zone")
-    p.add_argument("store", metavar="STORE", help="store path")
-    p.add_argument("--sample", type=nonneg_int, default=0, help="sample index (default 0)")
+    p = sub.add_parser("plot", help="PNG of a stored sample, or of a section with its prediction",
+                       description="STORE: one stored sample (section, fault label, damage "
+                       "zone). SECTION (.sgy, .segy, .npy or .png): the section, with --pred "
+                       "(fault probabilities of the same shape, e.g. from demseis predict) "
+                       "drawn where they reach Otsu's threshold of their own values (or "
+                       "--threshold), and --labels (a picked mask: .npy, .png or SEG-Y).")
+    p.add_argument("source", metavar="STORE|SECTION", help="store path, or a section file")
+    p.add_argument("--sample", type=nonneg_int, default=None,
+                   help="sample index of a store (default 0)")
+    p.add_argument("--pred", default=None, help="a section's fault probabilities (.sgy, .npy)")
+    p.add_argument("--labels", default=None, help="a section's picked mask (.npy, .png, .sgy)")
+    p.add_argument("--threshold", type=float, default=None,
+                   help="draw the prediction from this probability (default: Otsu's threshold "
+                   "of the prediction)")
     p.add_argument("--out", required=True, help="output PNG path")
     p.set_defaults(func=cmd_plot)
 
@@ -34,7 +45,23 @@ def cmd_preview(args: argparse.Namespace) -> int:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from demseis.plotting import plot_sample
+    import os
 
-    print(plot_sample(args.store, args.sample, args.out))
+    from demseis.errors import InputError
+    from demseis.evaluation.fieldio import MASK_SUFFIXES
+    from demseis.plotting import plot_sample, plot_section
+
+    section_file = not os.path.isdir(args.source) and args.source.lower().endswith(MASK_SUFFIXES)
+    if section_file:
+        if args.sample is not None:
+            raise InputError(f"--sample is for a store; {args.source!r} is a section file")
+        print(plot_section(args.source, args.out, pred=args.pred, labels=args.labels,
+                           threshold=args.threshold))
+        return 0
+    given = [f for f, v in (("--pred", args.pred), ("--labels", args.labels),
+                            ("--threshold", args.threshold)) if v is not None]
+    if given:
+        raise InputError(f"{given[0]} is for a section file (.sgy, .segy, .npy, .png); "
+                         f"{args.source!r} is read as a store")
+    print(plot_sample(args.source, args.sample or 0, args.out))
     return 0

@@ -32,7 +32,9 @@ def _chain(store, tmp_path, capsys, steps: int) -> dict:
     sample = int(np.flatnonzero(demseis.open(store).done)[-1])
     sgy, pred = tmp_path / "in.sgy", tmp_path / "pred.sgy"
     assert main(["export-segy", str(store), "--sample", str(sample), "--out", str(sgy)]) == 0
-    assert main(["predict", str(model), str(sgy), "--out", str(pred), "--device", "cpu"]) == 0
+    assert main(["predict", str(model), str(sgy), "--out", str(pred), "--device", "cpu",
+                 "--png", str(tmp_path / "pred.png")]) == 0
+    assert (tmp_path / "pred.png").stat().st_size > 5_000   # the section with its prediction
     import segyio
 
     with segyio.open(str(sgy), ignore_geometry=True) as a, \
