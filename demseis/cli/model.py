@@ -82,11 +82,13 @@ def _train_command(args: argparse.Namespace) -> int:
     from demseis.api import train
 
     quiet = args.quiet
-    train(args.store, args.out, weights=_weights(args.weights), steps=args.steps, crop=args.crop, batch=args.batch,
+    metrics = train(args.store, args.out, weights=_weights(args.weights), steps=args.steps, crop=args.crop, batch=args.batch,
           base=args.base, lr=args.lr, seed=args.seed, device=args.device,
           val_every=args.val_every, save_every=args.save_every, resume=args.resume,
           threads=args.threads, progress=not quiet and sys.stderr.isatty(),
           log=None if quiet else print)
+    for text in metrics.get("warnings", []):
+        print(f"demseis: warning: {text}", file=sys.stderr)
     return 0
 
 

@@ -206,11 +206,15 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
         counts.append(result.counts)
         n_test, n_runs = n_test + len(test), n_runs + runs
     o = summarise(SampleCounts.concat(counts))  # every store's test samples, pooled
+    val_runs = sum(len(np.unique(FaultSegDataset(s, inputs=("seismic",), targets=("fault",),
+                                                 split="val").run_ids)) for s in stores)
     metrics = {**_scores(o), "threshold": 0.5, "tolerance_px": TOLERANCE_PX,
                "test_samples": n_test, "test_runs": n_runs,
-               "train_runs": int(info["n_runs"]), "device": info["device"],
+               "train_runs": int(info["n_runs"]), "val_runs": int(val_runs),
+               "device": info["device"],
                "steps": int(info["steps"]), "best_val_f1": info.get("best_val_f1"),
                "best_step": info.get("best_step"), **settings, "per_store": per_store}
+    metrics["warnings"] = training_warnings(metrics)
     blob = {"format": FORMAT, "version": VERSION, "base": base, "target": "fault",
             "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
             "metrics": metrics}
@@ -228,6 +232,28 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
             f"F1 {metrics['f1']:.3f}  AP {metrics['ap']:.3f}")
         log(f"wrote {out} and {metrics_path(out)}")
     return metrics
+
+
+#: the best validation step, as a share of the steps, below which the training warns
+EARLY_BEST = 0.3
+
+
+def training_warnings(metrics: dict[str, Any]) -> list[str]:
+    """What a user should know about a training from its metrics: a model chosen on a single
+    validation run (chance picks its step), a best step early in the training (the later
+    steps did not help: the data or the rate), a test on one run."""
+    out = []
+    if metrics.get("val_runs", 2) < 2:
+        out.append(f"the model was chosen on {metrics['val_runs']} validation run: its best "
+                   "step may be chance; generate more runs (10 % of the runs validate, at "
+                   "least 20 runs give 2)")
+    best, steps = metrics.get("best_step"), int(metrics.get("steps") or 0)
+    if best is not None and steps and best < EARLY_BEST * steps:
+        out.append(f"the best validation F1 came at step {best} of {steps}: the later steps "
+                   "did not improve it (too few runs to learn from, or too high a --lr)")
+    if metrics.get("test_runs", 2) < 2:
+        out.append(f"the test scores come from {metrics['test_runs']} run: a rough estimate")
+    return out
 
 
 def _scores(o: Any) -> dict[str, float]:

@@ -28,6 +28,10 @@ def _chain(store, tmp_path, capsys, steps: int) -> dict:
     metrics = json.loads(model.with_suffix(".json").read_text())
     assert set(metrics) >= {"precision", "recall", "f1", "ap", "test_samples", "test_runs"}
     assert metrics["steps"] == steps and metrics["test_runs"] >= 1
+    # tiny and quick have one validation run: the training says what that means (issue 38)
+    assert metrics["val_runs"] == 1
+    assert any("chosen on 1 validation run" in w for w in metrics["warnings"])
+    assert "demseis: warning: the model was chosen on 1 validation run" in capsys.readouterr().err
     assert all(0.0 <= metrics[k] <= 1.0 for k in ("precision", "recall", "f1", "ap"))
     sample = int(np.flatnonzero(demseis.open(store).done)[-1])
     sgy, pred = tmp_path / "in.sgy", tmp_path / "pred.sgy"
@@ -121,6 +125,17 @@ def test_predict_errors(tmp_path, capsys):
     assert "SEG-Y output needs SEG-Y input" in capsys.readouterr().err
     with pytest.raises(InputError, match="sections must be"):
         predict_array(None, np.zeros(5))
+
+
+def test_training_warnings_name_what_the_training_lacked():
+    from demseis.learning.model import training_warnings
+
+    good = {"val_runs": 3, "test_runs": 3, "best_step": 800, "steps": 1000}
+    assert training_warnings(good) == []
+    early = training_warnings({**good, "best_step": 100})
+    assert len(early) == 1 and "step 100 of 1000" in early[0]
+    thin = training_warnings({**good, "val_runs": 1, "test_runs": 1})
+    assert len(thin) == 2 and "1 validation run" in thin[0] and "from 1 run" in thin[1]
 
 
 def test_a_file_that_is_not_a_model_says_so(tmp_path):
