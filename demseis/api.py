@@ -316,19 +316,22 @@ def train(store: Any, out: str | Path = "model.pt", **kwargs: Any) -> dict[str, 
 
 
 def predict(model: Any, source: Any, out: str | Path | None = None, *,
-            device: str | None = None, overwrite: bool = False) -> Any:
+            device: str | None = None, overwrite: bool = False, progress: bool = False) -> Any:
     """Fault probability of seismic sections with a model from :func:`train`.
 
     Parameters
     ----------
     model : the model file (``model.pt``) or a model loaded by
         :func:`demseis.learning.model.load_model`.
-    source : a SEG-Y file (``.sgy``, ``.segy``), a ``.npy`` file, or an array (H, W) or
-        (N, H, W) of any size.
+    source : a SEG-Y file (``.sgy``, ``.segy``: a 2-D line, or a 3-D cube predicted along its
+        inlines and crosslines, :func:`demseis.learning.model.predict_cube`), a ``.npy``
+        file, or an array (H, W) or (N, H, W) of any size.
     out : where to write (``.sgy`` with the input's headers, or ``.npy``); None returns the
-        probabilities as an array of the input's shape (a SEG-Y section as (samples, traces)).
+        probabilities as an array of the input's shape (a SEG-Y section as (samples, traces);
+        a cube needs ``out``).
     device : ``"cpu"``, ``"cuda"`` ... (default: CUDA when available).
     overwrite : replace an existing ``out``.
+    progress : a progress bar over a cube's lines.
 
     Returns
     -------
@@ -337,7 +340,8 @@ def predict(model: Any, source: Any, out: str | Path | None = None, *,
     from demseis.learning import model as m  # lazy: torch
 
     if out is not None:  # the paths are checked before the model is loaded
-        return m.predict_file(model, source, out, device=device, overwrite=overwrite)
+        return m.predict_file(model, source, out, device=device, overwrite=overwrite,
+                              progress=progress)
     net = m.load_model(model, device) if isinstance(model, (str, Path)) else model
     if isinstance(source, (str, Path)):
         data = m.read_segy_section(source) if m.is_segy(source) else np.load(source)

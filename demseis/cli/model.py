@@ -52,7 +52,9 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p = sub.add_parser(
         "predict", help="fault probability of a SEG-Y or .npy section with a trained model",
         description="Apply a model from 'demseis train' to a SEG-Y section (one trace per "
-        "column) or a .npy array (H, W) or (N, H, W) of any size. Writes the fault probability "
+        "column), a 3-D SEG-Y cube (inline and crossline numbers in the trace headers: every "
+        "inline and crossline is predicted and the two averaged, one line in memory at a "
+        "time) or a .npy array (H, W) or (N, H, W) of any size. Writes the fault probability "
         "as SEG-Y with the input's headers (float32 samples) or as .npy; 'demseis score' "
         "reads either.")
     p.add_argument("model", metavar="MODEL", help="model file from demseis train")
@@ -96,7 +98,7 @@ def _predict_command(args: argparse.Namespace) -> int:
     from demseis.api import predict
 
     out = predict(args.model, args.input, args.out, device=args.device,
-                  overwrite=args.overwrite)
+                  overwrite=args.overwrite, progress=sys.stderr.isatty())
     print(f"wrote {out}")
     if args.png is not None:
         from demseis.plotting import plot_section

@@ -1,4 +1,5 @@
-"""Read a 2-D SEG-Y section, and write another section with a SEG-Y file's headers.
+"""Read a 2-D SEG-Y section or the lines of a 3-D cube, and write another section or cube
+with a SEG-Y file's headers.
 
 Used by ``demseis predict`` (fault probability of a field or synthetic section, written with
 the input's textual, binary and trace headers) and by ``demseis score`` (a ``.sgy``
@@ -9,7 +10,9 @@ the store's ``seismic`` arrays and ``demseis export-segy`` lay them out.
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import segyio
@@ -60,15 +63,93 @@ def write_segy_like(section: np.ndarray, template: str | Path, out: str | Path) 
             if (src.tracecount, len(src.samples)) != (sec.shape[1], sec.shape[0]):
                 raise InputError(f"section of shape {sec.shape} does not fit {str(template)!r} "
                                  f"({len(src.samples)} samples x {src.tracecount} traces)")
-            spec = segyio.tools.metadata(src)
-            spec.format = 5
-            with segyio.create(str(tmp), spec) as dst:
-                dst.text[0] = src.text[0]
-                dst.bin = src.bin
-                dst.bin.update(format=5)
-                for i in range(src.tracecount):
-                    dst.header[i] = src.header[i]
+            with _float_copy(src, tmp) as dst:
                 dst.trace = np.ascontiguousarray(sec.T)  # a trace per row
+        os.replace(tmp, out)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return out
+
+
+def _float_copy(src: Any, path: Path) -> Any:
+    """A new SEG-Y file at ``path`` with ``src``'s geometry and its textual, binary and trace
+    headers, whose samples are IEEE float32 (format 5), open for writing its traces."""
+    spec = segyio.tools.metadata(src)
+    spec.format = 5
+    dst = segyio.create(str(path), spec)
+    try:
+        dst.text[0] = src.text[0]
+        dst.bin = src.bin
+        dst.bin.update(format=5)
+        for i in range(src.tracecount):
+            dst.header[i] = src.header[i]
+    except BaseException:
+        dst.close()
+        raise
+    return dst
+
+
+@dataclass(frozen=True)
+class CubeGeometry:
+    """The inline / crossline geometry of a 3-D SEG-Y cube (segyio's, from the trace headers'
+    inline and crossline numbers at bytes 189 and 193)."""
+
+    ilines: np.ndarray
+    xlines: np.ndarray
+    n_samples: int
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """(inlines, crosslines, samples)."""
+        return (len(self.ilines), len(self.xlines), self.n_samples)
+
+
+def cube_geometry(path: str | Path) -> CubeGeometry | None:
+    """The geometry of ``path`` if it is a regular 3-D cube (at least 2 inlines and 2
+    crosslines, every inline and crossline pair present once); None for a 2-D line, or a file
+    whose traces have no such geometry (read as one section, a trace per column)."""
+    if not os.path.isfile(path):
+        raise InputError(f"{str(path)!r} does not exist")
+    try:
+        with segyio.open(str(path), "r") as f:
+            if f.unstructured or len(f.ilines) < 2 or len(f.xlines) < 2:
+                return None
+            return CubeGeometry(np.asarray(f.ilines), np.asarray(f.xlines), len(f.samples))
+    except (RuntimeError, OSError, ValueError):  # no inline/crossline geometry
+        return None
+
+
+def open_cube(path: str | Path) -> Any:
+    """The cube ``path`` opened for reading with its geometry (a segyio file; use ``with``)."""
+    return segyio.open(str(path), "r")
+
+
+def read_inline(f: Any, index: int) -> np.ndarray:
+    """Inline ``index`` (its position, not its number) of an open cube as a (samples,
+    crosslines) float32 section."""
+    return np.ascontiguousarray(np.asarray(f.iline[f.ilines[index]], np.float32).T)
+
+
+def read_crossline(f: Any, index: int) -> np.ndarray:
+    """Crossline ``index`` of an open cube as a (samples, inlines) float32 section."""
+    return np.ascontiguousarray(np.asarray(f.xline[f.xlines[index]], np.float32).T)
+
+
+def write_segy_cube_like(cube: Any, template: str | Path, out: str | Path) -> Path:
+    """Write ``cube`` (inlines, crosslines, samples: an array, or anything with that ``shape``
+    whose ``cube[k]`` is inline k) to ``out`` with ``template``'s textual, binary and trace
+    headers, as IEEE float32; one inline in memory at a time; under a temporary name, then
+    renamed."""
+    out = Path(out)
+    tmp = out.with_name(f".{out.name}.tmp{os.getpid()}")
+    try:
+        with segyio.open(str(template), "r") as src:
+            if tuple(cube.shape) != (len(src.ilines), len(src.xlines), len(src.samples)):
+                raise InputError(f"cube of shape {tuple(cube.shape)} does not fit "
+                                 f"{str(template)!r}")
+            with _float_copy(src, tmp) as dst:
+                for k, il in enumerate(src.ilines):
+                    dst.iline[il] = np.ascontiguousarray(cube[k], dtype=np.float32)
         os.replace(tmp, out)
     finally:
         tmp.unlink(missing_ok=True)

@@ -27,17 +27,21 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from demseis.datasets import FaultSegDataset, open_store, store_layout
 from demseis.errors import InputError, import_torch
 from demseis.evaluation.scoring import SampleCounts, summarise
 from demseis.evaluation.store_scoring import score_store
-from demseis.evaluation.segyfile import is_segy, read_segy_section, write_segy_like
+from demseis.evaluation.segyfile import (cube_geometry, is_segy, open_cube, read_crossline,
+                                        read_inline, read_segy_section, write_segy_cube_like,
+                                        write_segy_like)
 from demseis.learning.train import build_unet, check_weights, predict_sections, train_unet
 
 #: the model file's format tag and version
@@ -319,6 +323,84 @@ def predict_array(model: Any, sections: np.ndarray, *, tile: int = TILE,
     return out[0] if arr.ndim == 2 else out
 
 
+#: bytes of crossline-pass sums held in memory at once by :func:`predict_cube`
+CUBE_BLOCK_BYTES = 16 * 2**20
+
+
+def predict_cube(model: Any, inp: str | Path, out: str | Path, *,
+                 progress: bool = False) -> Path:
+    """Fault probability of a 3-D SEG-Y cube: every inline and every crossline predicted as a
+    section (:func:`predict_array`), the two averaged at each sample, written to ``out`` (SEG-Y
+    with the input's headers, or ``.npy`` (inlines, crosslines, samples)).
+
+    Memory does not grow with the cube: the inline pass writes each inline's probabilities to
+    a float32 ``.npy`` file beside ``out`` (as large as the cube; it becomes a ``.npy`` output,
+    or is removed), and the crossline pass reads and rewrites them in blocks of crosslines of
+    at most :data:`CUBE_BLOCK_BYTES`, with explicit reads and writes (no memory map, whose
+    pages would count against the process).
+    """
+    inp, out = Path(inp), Path(out)
+    geom = cube_geometry(inp)
+    if geom is None:
+        raise InputError(f"{str(inp)!r} is not a 3-D cube (no inline/crossline geometry)")
+    n_il, n_xl, n_s = geom.shape
+    work = out.with_name(f".{out.name}.sum{os.getpid()}.npy")
+    try:
+        header = np.lib.format.open_memmap(work, mode="w+", dtype=np.float32, shape=geom.shape)
+        offset = int(header.offset)
+        del header
+        row = n_xl * n_s * 4                      # bytes of one inline in the file
+        step = max(1, CUBE_BLOCK_BYTES // (n_il * n_s * 4))
+        bar = tqdm(total=n_il + n_xl, desc="predict", unit="line", disable=not progress,
+                   file=sys.stderr)
+        fd = os.open(work, os.O_RDWR)
+        try:
+            with open_cube(inp) as f:
+                for i in range(n_il):              # inlines: (samples, crosslines)
+                    prob = np.ascontiguousarray(predict_array(model, read_inline(f, i)).T)
+                    os.pwrite(fd, prob.tobytes(), offset + i * row)
+                    bar.update()
+                for j0 in range(0, n_xl, step):    # crosslines, a block at a time
+                    j1 = min(j0 + step, n_xl)
+                    width = (j1 - j0) * n_s * 4
+                    block = np.empty((n_il, j1 - j0, n_s), np.float32)
+                    for i in range(n_il):
+                        block[i] = np.frombuffer(
+                            os.pread(fd, width, offset + i * row + j0 * n_s * 4),
+                            np.float32).reshape(j1 - j0, n_s)
+                    for j in range(j0, j1):        # (samples, inlines)
+                        along = predict_array(model, read_crossline(f, j)).T
+                        block[:, j - j0] = 0.5 * (block[:, j - j0] + along)
+                        bar.update()
+                    for i in range(n_il):
+                        os.pwrite(fd, block[i].tobytes(), offset + i * row + j0 * n_s * 4)
+        finally:
+            os.close(fd)
+            bar.close()
+        if is_segy(out):
+            write_segy_cube_like(_InlineFile(work, offset, geom.shape), inp, out)
+        else:
+            os.replace(work, out)
+    finally:
+        work.unlink(missing_ok=True)
+    return out
+
+
+class _InlineFile:
+    """The (inlines, crosslines, samples) float32 array of a file, read one inline per index
+    with an explicit read (what :func:`~demseis.evaluation.segyfile.write_segy_cube_like`
+    reads from)."""
+
+    def __init__(self, path: Path, offset: int, shape: tuple[int, int, int]) -> None:
+        self.path, self.offset, self.shape = path, offset, shape
+
+    def __getitem__(self, k: int) -> np.ndarray:
+        n_xl, n_s = self.shape[1:]
+        with open(self.path, "rb") as f:
+            f.seek(self.offset + int(k) * n_xl * n_s * 4)
+            return np.fromfile(f, np.float32, n_xl * n_s).reshape(n_xl, n_s)
+
+
 def _starts(n: int, tile: int, overlap: int) -> list[int]:
     if n <= tile:
         return [0]
@@ -343,18 +425,20 @@ def _predict_one(model: Any, sec: np.ndarray, tile: int, overlap: int) -> np.nda
 
 
 def predict_file(model: Any, inp: str | Path, out: str | Path, *, device: str | None = None,
-                 overwrite: bool = False) -> Path:
-    """Fault probability of the section(s) in ``inp``, written to ``out``.
+                 overwrite: bool = False, progress: bool = False) -> Path:
+    """Fault probability of the section(s) or cube in ``inp``, written to ``out``.
 
     Parameters
     ----------
     model : a model file from :func:`train_model`, or a loaded model (:func:`load_model`).
-    inp : a SEG-Y file (``.sgy`` / ``.segy``: one 2-D section, a trace per column) or a
-        ``.npy`` array (H, W) or (N, H, W).
+    inp : a SEG-Y file (``.sgy`` / ``.segy``): a 3-D cube with inline and crossline numbers
+        in its trace headers (:func:`predict_cube`), or else one 2-D section, a trace per
+        column; or a ``.npy`` array (H, W) or (N, H, W).
     out : ``.sgy`` / ``.segy`` (SEG-Y input only: the input's headers, float32 samples) or
-        ``.npy`` (float32; (1, H, W) for SEG-Y input, so that ``demseis score`` reads it;
-        else the input's shape).
+        ``.npy`` (float32; (1, H, W) for a SEG-Y section, so that ``demseis score`` reads it;
+        (inlines, crosslines, samples) for a cube; else the input's shape).
     overwrite : replace an existing ``out``.
+    progress : a progress bar over a cube's lines on stderr.
     """
     inp, out = Path(inp), Path(out)
     if out.exists() and not overwrite:
@@ -362,7 +446,7 @@ def predict_file(model: Any, inp: str | Path, out: str | Path, *, device: str | 
     if not (is_segy(out) or out.suffix == ".npy"):
         raise InputError(f"--out {str(out)!r}: name a .sgy, .segy or .npy file")
     if is_segy(inp):
-        data = read_segy_section(inp)
+        data = None if cube_geometry(inp) is not None else read_segy_section(inp)
     elif inp.suffix == ".npy":
         if not inp.is_file():
             raise InputError(f"{str(inp)!r} does not exist")
@@ -375,6 +459,8 @@ def predict_file(model: Any, inp: str | Path, out: str | Path, *, device: str | 
     if is_segy(out) and not is_segy(inp):
         raise InputError(f"--out {str(out)!r}: SEG-Y output needs SEG-Y input (its headers)")
     net = load_model(model, device) if isinstance(model, (str, Path)) else model
+    if is_segy(inp) and cube_geometry(inp) is not None:
+        return predict_cube(net, inp, out, progress=progress)
     prob = predict_array(net, data)
     if is_segy(out):
         return write_segy_like(prob, inp, out)

@@ -168,3 +168,73 @@ def test_generate_train_predict_score_on_quick(tmp_path, capsys):
     demseis.generate("quick", out=store)
     result = _chain(store, tmp_path, capsys, steps=6)
     assert result["overall"]["n_samples"] == 1
+
+
+def _write_cube(path, cube, ilines, xlines, *, sorting_inline=True):
+    """A 3-D SEG-Y file of ``cube`` (inlines, crosslines, samples) at 4 ms, IBM float (format
+    1, as field cubes are), with inline/crossline numbers and coordinates in the headers."""
+    import segyio
+
+    spec = segyio.spec()
+    spec.ilines, spec.xlines = list(ilines), list(xlines)
+    spec.samples = list(range(0, 4 * cube.shape[2], 4))
+    spec.format = 1
+    spec.sorting = (segyio.TraceSortingFormat.INLINE_SORTING if sorting_inline
+                    else segyio.TraceSortingFormat.CROSSLINE_SORTING)
+    with segyio.create(str(path), spec) as f:
+        k = 0
+        pairs = ([(i, j) for i in range(len(ilines)) for j in range(len(xlines))] if sorting_inline
+                 else [(i, j) for j in range(len(xlines)) for i in range(len(ilines))])
+        for i, j in pairs:
+            f.header[k] = {segyio.su.iline: ilines[i], segyio.su.xline: xlines[j],
+                           segyio.su.cdpx: 1000 + 25 * j, segyio.su.cdpy: 5000 + 25 * i,
+                           segyio.su.offset: 1}
+            f.trace[k] = cube[i, j].astype(np.float32)
+            k += 1
+        f.bin.update(tsort=spec.sorting)
+
+
+@pytest.mark.parametrize("sorting_inline, block_bytes", [(True, 64 * 2**20), (False, 64 * 2**20),
+                                                        (True, 5 * 24 * 4 * 2)])
+def test_predict_a_3d_cube_along_inlines_and_crosslines(tmp_path, monkeypatch, sorting_inline,
+                                                        block_bytes):
+    """issue 38: a 3-D SEG-Y cube is predicted along every inline and every crossline and the
+    two averaged (checked against the same model applied to the cube in memory); the output
+    cube has the input's geometry and trace headers, whatever its trace order."""
+    import segyio
+    import torch
+
+    from demseis.learning.model import predict_file
+    from demseis.learning.train import build_unet
+
+    import demseis.learning.model as model_module
+
+    monkeypatch.setattr(model_module, "CUBE_BLOCK_BYTES", block_bytes)  # 2 crosslines a block
+    torch.manual_seed(0)
+    net = build_unet(4).eval()
+    rng = np.random.default_rng(0)
+    cube = rng.normal(size=(5, 7, 24)).astype(np.float32)
+    ilines, xlines = [101, 102, 103, 104, 105], [11, 13, 15, 17, 19, 21, 23]
+    inp, out = tmp_path / "cube.sgy", tmp_path / "prob.sgy"
+    _write_cube(inp, cube, ilines, xlines, sorting_inline=sorting_inline)
+    # what segyio reads back (IBM floats are not exactly float32)
+    def as_il_xl(f):  # segyio.tools.cube is (slow, fast, samples): crossline-major if so sorted
+        c = segyio.tools.cube(f)
+        return c if f.sorting == segyio.TraceSortingFormat.INLINE_SORTING else c.transpose(1, 0, 2)
+
+    with segyio.open(str(inp)) as f:
+        stored = as_il_xl(f).astype(np.float32)
+    np.testing.assert_allclose(stored, cube, rtol=1e-6)
+    assert predict_file(net, inp, out) == out
+    along_il = np.stack([predict_array(net, stored[i].T).T for i in range(5)])
+    along_xl = np.stack([predict_array(net, stored[:, j].T).T for j in range(7)], axis=1)
+    with segyio.open(str(inp)) as a, segyio.open(str(out)) as b:
+        assert list(b.ilines) == ilines and list(b.xlines) == xlines
+        assert b.sorting == a.sorting and len(b.samples) == 24
+        assert b.bin[segyio.BinField.Format] == 5               # IEEE float32 probabilities
+        for k in range(a.tracecount):
+            assert dict(b.header[k]) == dict(a.header[k])
+        np.testing.assert_allclose(as_il_xl(b), 0.5 * (along_il + along_xl), atol=1e-5)
+    npy = predict_file(net, inp, tmp_path / "prob.npy")
+    np.testing.assert_allclose(np.load(npy), 0.5 * (along_il + along_xl), atol=1e-5)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cube.sgy", "prob.npy", "prob.sgy"]
