@@ -307,11 +307,29 @@ def otsu_threshold(values: np.ndarray, bins: int = 256) -> float:
     return float(edges[1:-1][int(np.argmax(between))])
 
 
+def _read_line(path: str | Path, line: tuple[str, int] | None, flag: str) -> np.ndarray:
+    """The section in ``path``, or its inline / crossline ``line`` if it is a 3-D cube."""
+    from demseis.evaluation.fieldio import read_section
+    from demseis.evaluation.segyfile import cube_geometry, is_segy, read_cube_line
+
+    if is_segy(path) and cube_geometry(path) is not None:
+        if line is None:
+            raise InputError(f"{flag} {str(path)!r} is a 3-D cube: give --inline N or "
+                             "--crossline N")
+        return read_cube_line(path, *line)
+    if line is not None and flag == "section":
+        raise InputError(f"--{line[0]} is for a 3-D cube; {str(path)!r} is one section")
+    return read_section(path)
+
+
 def plot_section(section: str | Path, out: str | Path, *, pred: str | Path | None = None,
-                 labels: str | Path | None = None, threshold: float | None = None) -> Path:
+                 labels: str | Path | None = None, threshold: float | None = None,
+                 line: tuple[str, int] | None = None) -> Path:
     """A section from a file (SEG-Y, ``.npy`` or ``.png``), with a fault prediction over it
     (``pred``: probabilities in [0, 1], the same shape) and a hand-picked mask
-    (``labels``: ``.npy``, ``.png`` or SEG-Y), each in its own panel.
+    (``labels``: ``.npy``, ``.png`` or SEG-Y), each in its own panel. For a 3-D SEG-Y cube
+    (and a prediction cube), ``line`` = ``("inline", N)`` or ``("crossline", N)`` picks the
+    line by its header number.
 
     The prediction is drawn where it reaches ``threshold``: by default Otsu's threshold of its
     own probabilities (:func:`otsu_threshold`), named in the title, so that a model whose
@@ -328,14 +346,15 @@ def plot_section(section: str | Path, out: str | Path, *, pred: str | Path | Non
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # lazy: see the module docstring
 
-    from demseis.evaluation.fieldio import read_mask, read_section
+    from demseis.evaluation.fieldio import read_mask
 
-    sec = read_section(section)
+    sec = _read_line(section, line, "section")
     # (title, what is drawn over the section, the probability it is drawn from; None: a mask)
+    name = Path(section).name + ("" if line is None else f", {line[0]} {line[1]}")
     panels: list[tuple[str, np.ndarray | None, float | None]] = [
-        (f"section: {Path(section).name}", None, None)]
+        (f"section: {name}", None, None)]
     if pred is not None:
-        prob = read_section(pred)
+        prob = _read_line(pred, line, "--pred")
         _same_shape(prob, sec, "--pred", pred)
         if prob.min() < 0 or prob.max() > 1:
             raise InputError(f"--pred {str(pred)!r}: values {prob.min():.3g}..{prob.max():.3g} "

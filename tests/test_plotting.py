@@ -59,3 +59,31 @@ def test_plot_of_a_section_with_prediction_and_picks(tmp_path, capsys):
     assert "has shape (60, 50), the section (60, 80)" in capsys.readouterr().err
     assert main(["plot", str(tmp_path / "s.npy"), "--sample", "3", "--out", str(out)]) == 2
     assert "--sample is for a store" in capsys.readouterr().err
+
+
+def test_plot_a_line_of_a_3d_cube_with_its_prediction(tmp_path, capsys):
+    """issue 38: `demseis plot CUBE.sgy --pred P.sgy --inline N` draws one line of a cube
+    (picked by its header number) with the same line of the prediction cube."""
+    import numpy as np
+
+    from demseis.cli import main
+    from demseis.evaluation.segyfile import read_cube_line, write_segy_cube_like
+    from tests.evaluation._helpers import write_cube
+
+    rng = np.random.default_rng(0)
+    cube = rng.normal(size=(4, 6, 32)).astype(np.float32)
+    write_cube(tmp_path / "c.sgy", cube, [1, 2, 3, 4], [20, 21, 22, 23, 24, 25])
+    prob = rng.random((4, 6, 32)).astype(np.float32)
+    write_segy_cube_like(prob, tmp_path / "c.sgy", tmp_path / "p.sgy")
+    np.testing.assert_allclose(read_cube_line(tmp_path / "p.sgy", "crossline", 22), prob[:, 2].T)
+    np.testing.assert_allclose(read_cube_line(tmp_path / "c.sgy", "inline", 3), cube[2].T,
+                               rtol=1e-6)                          # IBM floats read back
+    out = tmp_path / "l.png"
+    assert main(["plot", str(tmp_path / "c.sgy"), "--pred", str(tmp_path / "p.sgy"),
+                 "--inline", "3", "--out", str(out)]) == 0
+    assert out.stat().st_size > 5_000
+    capsys.readouterr()
+    assert main(["plot", str(tmp_path / "c.sgy"), "--out", str(out)]) == 2
+    assert "is a 3-D cube: give --inline N or --crossline N" in capsys.readouterr().err
+    assert main(["plot", str(tmp_path / "c.sgy"), "--crossline", "99", "--out", str(out)]) == 2
+    assert "has no crossline 99: its crosslines are 20..25" in capsys.readouterr().err

@@ -32,6 +32,11 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.add_argument("--threshold", type=float, default=None,
                    help="draw the prediction from this probability (default: Otsu's threshold "
                    "of the prediction)")
+    line = p.add_mutually_exclusive_group()
+    line.add_argument("--inline", type=int, default=None,
+                      help="of a 3-D SEG-Y cube (and its --pred cube): the inline number")
+    line.add_argument("--crossline", type=int, default=None,
+                      help="of a 3-D SEG-Y cube: the crossline number")
     p.add_argument("--out", required=True, help="output PNG path")
     p.set_defaults(func=cmd_plot)
 
@@ -55,11 +60,14 @@ def cmd_plot(args: argparse.Namespace) -> int:
     if section_file:
         if args.sample is not None:
             raise InputError(f"--sample is for a store; {args.source!r} is a section file")
+        line = (("inline", args.inline) if args.inline is not None else
+                ("crossline", args.crossline) if args.crossline is not None else None)
         print(plot_section(args.source, args.out, pred=args.pred, labels=args.labels,
-                           threshold=args.threshold))
+                           threshold=args.threshold, line=line))
         return 0
     given = [f for f, v in (("--pred", args.pred), ("--labels", args.labels),
-                            ("--threshold", args.threshold)) if v is not None]
+                            ("--threshold", args.threshold), ("--inline", args.inline),
+                            ("--crossline", args.crossline)) if v is not None]
     if given:
         raise InputError(f"{given[0]} is for a section file (.sgy, .segy, .npy, .png); "
                          f"{args.source!r} is read as a store")

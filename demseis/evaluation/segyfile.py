@@ -135,6 +135,21 @@ def read_crossline(f: Any, index: int) -> np.ndarray:
     return np.ascontiguousarray(np.asarray(f.xline[f.xlines[index]], np.float32).T)
 
 
+def read_cube_line(path: str | Path, kind: str, number: int) -> np.ndarray:
+    """Inline or crossline ``number`` (its header number) of the cube ``path`` as a (samples,
+    traces) float32 section; InputError naming the numbers the cube has."""
+    if kind not in ("inline", "crossline"):
+        raise InputError(f"kind must be 'inline' or 'crossline', got {kind!r}")
+    with open_cube(path) as f:
+        numbers = f.ilines if kind == "inline" else f.xlines
+        where = np.flatnonzero(np.asarray(numbers) == number)
+        if where.size == 0:
+            raise InputError(f"{str(path)!r} has no {kind} {number}: its {kind}s are "
+                             f"{numbers[0]}..{numbers[-1]} ({len(numbers)} of them)")
+        read = read_inline if kind == "inline" else read_crossline
+        return read(f, int(where[0]))
+
+
 def write_segy_cube_like(cube: Any, template: str | Path, out: str | Path) -> Path:
     """Write ``cube`` (inlines, crosslines, samples: an array, or anything with that ``shape``
     whose ``cube[k]`` is inline k) to ``out`` with ``template``'s textual, binary and trace

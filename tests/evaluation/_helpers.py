@@ -1,4 +1,5 @@
-"""Helpers shared by the evaluation tests: small stores to score, train on and run baselines on."""
+"""Helpers shared by the evaluation tests: small stores to score, train on and run baselines on,
+and a small 3-D SEG-Y cube."""
 
 from __future__ import annotations
 
@@ -62,3 +63,27 @@ def toy_store(path, n_shards=5, per_shard=4, h=32, w=32, fault_fn=None, seismic_
                              {"run_id": k, "freq_hz": np.array([20.0, 20.0, 40.0, 40.0]),
                               "snr_db": np.array([np.inf, 10.0, np.inf, 10.0]),
                               "dip_deg": dip})
+
+
+def write_cube(path, cube, ilines, xlines, *, sorting_inline=True):
+    """A 3-D SEG-Y file of ``cube`` (inlines, crosslines, samples) at 4 ms, IBM float (format
+    1, as field cubes are), with inline/crossline numbers and coordinates in the headers."""
+    import segyio
+
+    spec = segyio.spec()
+    spec.ilines, spec.xlines = list(ilines), list(xlines)
+    spec.samples = list(range(0, 4 * cube.shape[2], 4))
+    spec.format = 1
+    spec.sorting = (segyio.TraceSortingFormat.INLINE_SORTING if sorting_inline
+                    else segyio.TraceSortingFormat.CROSSLINE_SORTING)
+    with segyio.create(str(path), spec) as f:
+        k = 0
+        pairs = ([(i, j) for i in range(len(ilines)) for j in range(len(xlines))] if sorting_inline
+                 else [(i, j) for j in range(len(xlines)) for i in range(len(ilines))])
+        for i, j in pairs:
+            f.header[k] = {segyio.su.iline: ilines[i], segyio.su.xline: xlines[j],
+                           segyio.su.cdpx: 1000 + 25 * j, segyio.su.cdpy: 5000 + 25 * i,
+                           segyio.su.offset: 1}
+            f.trace[k] = cube[i, j].astype(np.float32)
+            k += 1
+        f.bin.update(tsort=spec.sorting)

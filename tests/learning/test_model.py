@@ -16,6 +16,7 @@ import demseis  # noqa: E402
 from demseis.cli import main  # noqa: E402
 from demseis.errors import InputError  # noqa: E402
 from demseis.learning.model import load_model, predict_array  # noqa: E402
+from tests.evaluation._helpers import write_cube  # noqa: E402
 from tests.generator._helpers import kinematic_cfg  # noqa: E402
 
 FAST = ["--base", "4", "--batch", "4", "--threads", "1", "--device", "cpu", "--quiet"]
@@ -170,30 +171,6 @@ def test_generate_train_predict_score_on_quick(tmp_path, capsys):
     assert result["overall"]["n_samples"] == 1
 
 
-def _write_cube(path, cube, ilines, xlines, *, sorting_inline=True):
-    """A 3-D SEG-Y file of ``cube`` (inlines, crosslines, samples) at 4 ms, IBM float (format
-    1, as field cubes are), with inline/crossline numbers and coordinates in the headers."""
-    import segyio
-
-    spec = segyio.spec()
-    spec.ilines, spec.xlines = list(ilines), list(xlines)
-    spec.samples = list(range(0, 4 * cube.shape[2], 4))
-    spec.format = 1
-    spec.sorting = (segyio.TraceSortingFormat.INLINE_SORTING if sorting_inline
-                    else segyio.TraceSortingFormat.CROSSLINE_SORTING)
-    with segyio.create(str(path), spec) as f:
-        k = 0
-        pairs = ([(i, j) for i in range(len(ilines)) for j in range(len(xlines))] if sorting_inline
-                 else [(i, j) for j in range(len(xlines)) for i in range(len(ilines))])
-        for i, j in pairs:
-            f.header[k] = {segyio.su.iline: ilines[i], segyio.su.xline: xlines[j],
-                           segyio.su.cdpx: 1000 + 25 * j, segyio.su.cdpy: 5000 + 25 * i,
-                           segyio.su.offset: 1}
-            f.trace[k] = cube[i, j].astype(np.float32)
-            k += 1
-        f.bin.update(tsort=spec.sorting)
-
-
 @pytest.mark.parametrize("sorting_inline, block_bytes", [(True, 64 * 2**20), (False, 64 * 2**20),
                                                         (True, 5 * 24 * 4 * 2)])
 def test_predict_a_3d_cube_along_inlines_and_crosslines(tmp_path, monkeypatch, sorting_inline,
@@ -216,7 +193,7 @@ def test_predict_a_3d_cube_along_inlines_and_crosslines(tmp_path, monkeypatch, s
     cube = rng.normal(size=(5, 7, 24)).astype(np.float32)
     ilines, xlines = [101, 102, 103, 104, 105], [11, 13, 15, 17, 19, 21, 23]
     inp, out = tmp_path / "cube.sgy", tmp_path / "prob.sgy"
-    _write_cube(inp, cube, ilines, xlines, sorting_inline=sorting_inline)
+    write_cube(inp, cube, ilines, xlines, sorting_inline=sorting_inline)
     # what segyio reads back (IBM floats are not exactly float32)
     def as_il_xl(f):  # segyio.tools.cube is (slow, fast, samples): crossline-major if so sorted
         c = segyio.tools.cube(f)
