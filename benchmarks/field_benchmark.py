@@ -361,6 +361,36 @@ def summary_line(name: str, cells: list[dict], items: dict, config: dict) -> dic
     return line
 
 
+def model_line(arg: str, items: dict, tolerances: list[float]) -> dict:
+    """The JSON line of a given model file (``NAME=PATH``, :func:`demseis.learning.model.load_model`)
+    scored on the field sets and F3 (one model: no seeds to summarise)."""
+    from demseis.errors import InputError
+    from demseis.learning.model import load_model
+
+    name, eq, path = arg.partition("=")
+    if not eq or not name or not Path(path).is_file():
+        raise InputError(f"--model {arg!r}: expected NAME=PATH of a model file")
+    model = load_model(path, "cpu")
+    cache: dict = {}
+    line = {"benchmark": "field_benchmark", "model": name, "path": str(path),
+            "trained": {k: model.demseis_metrics.get(k) for k in ("steps", "base", "seed")},
+            "field": {}, "f3": {}}
+    for key, item in items.items():
+        # "auto" scales by the training stores' period, which a given model does not come with
+        if item["kind"] == "synthetic" or item.get("scale") == "auto":
+            continue
+        got = item_scores(model, key, item, tolerances, 1.0, cache)
+        got.pop("_prob", None)
+        if item["kind"] == "f3":
+            line["f3"][item["scale"]] = got
+        else:
+            got["share_above_0.5_by_section"] = got.pop("share_above_0.5")
+            got["share_above_0.5"] = round(float(np.mean(list(
+                got["share_above_0.5_by_section"].values()))), 5)
+            line["field"].setdefault(item["name"], {})[item["scale"]] = got
+    return line
+
+
 # -------------------------------------------------------------------------------- figure
 
 def draw(path: Path, panels: dict, sections: list[tuple[str, np.ndarray, np.ndarray | None]],
@@ -409,6 +439,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument("--store", action="append", metavar="NAME=PATH", help="a training store")
     ap.add_argument("--mix", action="append", metavar="NAME=A:w,B:w",
                     help="a mixed training set: store paths or training-set names, weights")
+    ap.add_argument("--model", action="append", metavar="NAME=PATH",
+                    help="a trained model file (demseis train's, e.g. the shipped one) scored "
+                    "as it is, without training: field sets and F3 only")
     ap.add_argument("--planar", type=int, metavar="N_RUNS",
                     help="build and train the planar control")
     ap.add_argument("--planar-steep", type=int, metavar="N_RUNS",
@@ -459,7 +492,8 @@ def main(argv: list[str] | None = None) -> int:
     cache = Path(args.cache).expanduser()
     (cache / "models").mkdir(parents=True, exist_ok=True)
     fsets = field_sets(args)
-    tsets = training_sets(args, cache)
+    trains = any((args.store, args.mix, args.planar, args.planar_steep, args.generate))
+    tsets = training_sets(args, cache) if trains or not args.model else {}
 
     # what every model is scored on: item key -> item; a key names its inputs
     items: dict[str, dict] = {}
@@ -477,6 +511,9 @@ def main(argv: list[str] | None = None) -> int:
         if args.f3:
             items[f"f3:{scale}:{digest(_file_id(args.f3))}"] = {
                 "kind": "f3", "scale": scale, "path": args.f3}
+
+    for arg in args.model or []:  # given models: scored as they are, on the field sections
+        print(json.dumps(model_line(arg, items, tols)), flush=True)
 
     path = Path(args.results)
     results = load_results(path, "field_benchmark")

@@ -322,7 +322,8 @@ def predict(model: Any, source: Any, out: str | Path | None = None, *,
     Parameters
     ----------
     model : the model file (``model.pt``) or a model loaded by
-        :func:`demseis.learning.model.load_model`.
+        :func:`demseis.learning.model.load_model`; None: the model shipped with demseis
+        (:data:`demseis.learning.model.PRETRAINED`, docs/model.md).
     source : a SEG-Y file (``.sgy``, ``.segy``: a 2-D line, or a 3-D cube predicted along its
         inlines and crosslines, :func:`demseis.learning.model.predict_cube`), a ``.npy``
         file, or an array (H, W) or (N, H, W) of any size.
@@ -339,6 +340,8 @@ def predict(model: Any, source: Any, out: str | Path | None = None, *,
     """
     from demseis.learning import model as m  # lazy: torch
 
+    if model is None:
+        model = m.pretrained_path()
     if out is not None:  # the paths are checked before the model is loaded
         return m.predict_file(model, source, out, device=device, overwrite=overwrite,
                               progress=progress)

@@ -51,14 +51,19 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
     p = sub.add_parser(
         "predict", help="fault probability of a SEG-Y or .npy section with a trained model",
-        description="Apply a model from 'demseis train' to a SEG-Y section (one trace per "
+        description="Apply a model (the one shipped with demseis, docs/model.md, or --model "
+        "from 'demseis train') to a SEG-Y section (one trace per "
         "column), a 3-D SEG-Y cube (inline and crossline numbers in the trace headers: every "
         "inline and crossline is predicted and the two averaged, one line in memory at a "
         "time) or a .npy array (H, W) or (N, H, W) of any size. Writes the fault probability "
         "as SEG-Y with the input's headers (float32 samples) or as .npy; 'demseis score' "
         "reads either.")
-    p.add_argument("model", metavar="MODEL", help="model file from demseis train")
-    p.add_argument("input", metavar="IN", help="input section: .sgy, .segy or .npy")
+    p.add_argument("paths", nargs="+", metavar="[MODEL] IN",
+                   help="input section or cube: .sgy, .segy or .npy (MODEL IN: a model file "
+                   "from demseis train first, as --model)")
+    p.add_argument("--model", default=None,
+                   help="model file from demseis train (default: the model shipped with "
+                   "demseis, docs/model.md)")
     p.add_argument("--out", required=True, help="output: .sgy/.segy (SEG-Y input) or .npy")
     p.add_argument("--device", default=None,
                    help="cpu, cuda, cuda:1 ... (default: CUDA when available)")
@@ -97,11 +102,21 @@ def _train_command(args: argparse.Namespace) -> int:
 def _predict_command(args: argparse.Namespace) -> int:
     from demseis.api import predict
 
-    out = predict(args.model, args.input, args.out, device=args.device,
-                  overwrite=args.overwrite, progress=sys.stderr.isatty())
+    if len(args.paths) > 2:
+        raise InputError(f"predict takes [MODEL] IN, got {len(args.paths)} paths: "
+                         + " ".join(args.paths))
+    if len(args.paths) == 2:
+        if args.model is not None:
+            raise InputError("give the model once: predict MODEL IN, or predict IN --model "
+                             "MODEL")
+        model, source = args.paths
+    else:
+        model, source = args.model, args.paths[0]
+    out = predict(model, source, args.out, device=args.device, overwrite=args.overwrite,
+                  progress=sys.stderr.isatty())
     print(f"wrote {out}")
     if args.png is not None:
         from demseis.plotting import plot_section
 
-        print(f"wrote {plot_section(args.input, args.png, pred=out)}")
+        print(f"wrote {plot_section(source, args.png, pred=out)}")
     return 0

@@ -279,6 +279,22 @@ def _atomic_save(torch: Any, obj: Any, path: Path) -> None:
         tmp.unlink(missing_ok=True)
 
 
+#: the model shipped with demseis (docs/model.md: its data, recipe, scores and limits)
+PRETRAINED = "fault_unet.pt"
+
+
+def pretrained_path() -> Path:
+    """Path of the model shipped with demseis (:data:`PRETRAINED`, in
+    ``demseis/learning/pretrained/``); InputError if this installation lacks it."""
+    from importlib import resources
+
+    path = Path(str(resources.files("demseis.learning") / "pretrained" / PRETRAINED))
+    if not path.is_file():
+        raise InputError(f"this installation of demseis has no shipped model ({path}); give "
+                         "one with --model (demseis train makes one)")
+    return path
+
+
 def load_model(path: str | Path, device: str | None = None) -> Any:
     """The U-Net saved by :func:`train_model`, in eval mode on ``device`` (default: CUDA when
     available); its ``demseis_metrics`` attribute holds the saved metrics."""

@@ -199,3 +199,23 @@ def test_planar_controls_are_built_once_with_their_fault_counts(bench, field, tm
         assert lo <= faults.min() and faults.max() <= hi
     assert bench["main"](argv) == 0
     assert "building" not in capsys.readouterr().err
+
+
+def test_a_given_model_is_scored_without_training(bench, field, tmp_path, capsys):
+    """--model NAME=PATH (the shipped model here) is scored on the field sets and F3 as it
+    is: one JSON line, the "auto" scale left out (it needs the training stores' period)."""
+    pytest.importorskip("torch")
+    from demseis.learning.model import pretrained_path
+
+    root, _ = field
+    argv = ["--model", f"shipped={pretrained_path()}", "--field-dir", str(root / "set"),
+            "--f3", str(root / "f3.sgy"), "--field-scale", "1", "auto",
+            "--results", str(tmp_path / "r.json"), "--cache", str(tmp_path / "c")]
+    assert bench["main"](argv) == 0
+    out = capsys.readouterr()
+    (line,) = [json.loads(x) for x in out.out.strip().splitlines()]
+    assert line["model"] == "shipped" and line["trained"]["steps"] == 1200
+    assert set(line["field"]) == {"set"} and set(line["field"]["set"]) == {"1"}
+    scores = line["field"]["set"]["1"]
+    assert 0.0 <= scores["ods_f1_tol3"] <= 1.0 and 0.0 <= scores["share_above_0.5"] <= 1.0
+    assert set(line["f3"]) == {"1"} and "training " not in out.err

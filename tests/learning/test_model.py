@@ -215,3 +215,27 @@ def test_predict_a_3d_cube_along_inlines_and_crosslines(tmp_path, monkeypatch, s
     npy = predict_file(net, inp, tmp_path / "prob.npy")
     np.testing.assert_allclose(np.load(npy), 0.5 * (along_il + along_xl), atol=1e-5)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cube.sgy", "prob.npy", "prob.sgy"]
+
+
+def test_the_shipped_model_predicts_when_no_model_is_named(tmp_path, capsys):
+    """issue 38: `demseis predict SECTION --out X` uses the model shipped in the package (at
+    most 10 MB, a demseis model); `predict MODEL IN` keeps working; both at once is refused."""
+    from demseis.learning.model import pretrained_path
+
+    shipped = pretrained_path()
+    assert shipped.stat().st_size < 10 * 2**20
+    net = load_model(shipped, "cpu")
+    assert net.demseis_metrics["steps"] == 1200
+    sec = np.random.default_rng(0).normal(size=(40, 56)).astype(np.float32)
+    np.save(tmp_path / "s.npy", sec)
+    assert main(["predict", str(tmp_path / "s.npy"), "--out", str(tmp_path / "a.npy"),
+                 "--device", "cpu"]) == 0
+    assert main(["predict", str(shipped), str(tmp_path / "s.npy"), "--out",
+                 str(tmp_path / "b.npy"), "--device", "cpu"]) == 0
+    a, b = np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy")
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_allclose(a, predict_array(net, sec), atol=1e-6)
+    capsys.readouterr()
+    assert main(["predict", str(shipped), str(tmp_path / "s.npy"), "--model", str(shipped),
+                 "--out", str(tmp_path / "c.npy")]) == 2
+    assert "give the model once" in capsys.readouterr().err
