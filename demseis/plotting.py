@@ -18,7 +18,9 @@ import numpy as np
 from demseis.datasets import open_store, read_particles, read_sample, shard_status
 from demseis.errors import ConfigError, InputError
 from demseis.evaluation.realism_report import report_rows
-from demseis.evaluation.segyfile import read_segy_section
+from demseis.evaluation.fieldio import read_mask, read_section
+from demseis.evaluation.segyfile import (cube_geometry, is_segy, read_cube_line,
+                                        read_segy_section)
 from demseis.generator.config import PRESETS, Config, load_config, stored_config
 from demseis.generator.engines import get_engine, require_particles
 from demseis.generator.layout import grid_of
@@ -309,9 +311,6 @@ def otsu_threshold(values: np.ndarray, bins: int = 256) -> float:
 
 def _read_line(path: str | Path, line: tuple[str, int] | None, flag: str) -> np.ndarray:
     """The section in ``path``, or its inline / crossline ``line`` if it is a 3-D cube."""
-    from demseis.evaluation.fieldio import read_section
-    from demseis.evaluation.segyfile import cube_geometry, is_segy, read_cube_line
-
     if is_segy(path) and cube_geometry(path) is not None:
         if line is None:
             raise InputError(f"{flag} {str(path)!r} is a 3-D cube: give --inline N or "
@@ -345,8 +344,6 @@ def plot_section(section: str | Path, out: str | Path, *, pred: str | Path | Non
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # lazy: see the module docstring
-
-    from demseis.evaluation.fieldio import read_mask
 
     sec = _read_line(section, line, "section")
     # (title, what is drawn over the section, the probability it is drawn from; None: a mask)

@@ -28,6 +28,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+from importlib import resources
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -286,8 +287,6 @@ PRETRAINED = "fault_unet.pt"
 def pretrained_path() -> Path:
     """Path of the model shipped with demseis (:data:`PRETRAINED`, in
     ``demseis/learning/pretrained/``); InputError if this installation lacks it."""
-    from importlib import resources
-
     path = Path(str(resources.files("demseis.learning") / "pretrained" / PRETRAINED))
     if not path.is_file():
         raise InputError(f"this installation of demseis has no shipped model ({path}); give "
