@@ -26,13 +26,12 @@ from types import FrameType
 from typing import Any
 
 _state = {"pending": False}
+_previous_hook: list[Any] = []
 
 
 class Finished(KeyboardInterrupt):
     """A Ctrl-C that came after the interrupted work had completed (a sweep whose every run
     was written and whose store was finalized): there is nothing to resume."""
-
-_previous_hook: list[Any] = []
 
 
 def _handler(signum: int, frame: FrameType | None) -> None:

@@ -102,8 +102,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Ctrl-C is recorded as well as raised: one swallowed where it landed (a __del__, a weakref
     # callback) is raised by the next check of a long loop, or reported below at the latest
     with interrupts.installed():
-        code = _main(argv)
-    return code
+        return _main(argv)
 
 
 def _stdout_closed() -> int:

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from demseis import interrupts
 from demseis.datasets import (
     ParamSpec,
     create_store,
@@ -37,7 +38,6 @@ from demseis.datasets import (
     writer_lock,
 )
 from demseis.datasets.layout import root_metadata_lost
-from demseis import interrupts
 from demseis.datasets.lock import pid_alive
 from demseis.errors import ConfigError, InputError, SimulationError, StoreError
 from demseis.generator.config import Config, load_config, parse_config
@@ -156,6 +156,20 @@ def _first_difference(a: Any, b: Any, path: str = "") -> str | None:
     return None if a == b else path.rstrip(".")
 
 
+def _check_same_config(out: Path, attrs: dict[str, Any]) -> None:
+    """Refuse the existing store ``out`` unless it was written with the config of ``attrs``
+    (:func:`store_attrs`): ConfigError naming the first difference; StoreError (from
+    ``read_store_attrs``) for a path that is not a demseis store."""
+    old = json.loads(json.dumps(read_store_attrs(out).get("config")))
+    new = json.loads(json.dumps(attrs["config"]))
+    if old != new:
+        diff = _first_difference(old, new) or "config"
+        raise ConfigError(
+            f"store {str(out)!r} was written with a different config (first difference: "
+            f"{diff}); use --overwrite to replace it, or choose another --out"
+        )
+
+
 def pending_runs(cfg: Config, out: str | Path, *, overwrite: bool = False) -> tuple[int, str]:
     """How many runs ``generate`` would compute into ``out`` now, and why, without writing.
 
@@ -175,13 +189,7 @@ def pending_runs(cfg: Config, out: str | Path, *, overwrite: bool = False) -> tu
         return n, "a new store" if not out.exists() else "--overwrite replaces the store"
     if root_metadata_lost(out):
         return n, "the store's root metadata is lost: its done runs are checked when it is rebuilt"
-    stored = json.loads(json.dumps(read_store_attrs(out).get("config")))
-    new = json.loads(json.dumps(store_attrs(cfg)["config"]))
-    if stored != new:
-        diff = _first_difference(stored, new) or "config"
-        raise ConfigError(
-            f"store {str(out)!r} was written with a different config (first difference: "
-            f"{diff}); use --overwrite to replace it, or choose another --out")
+    _check_same_config(out, store_attrs(cfg))
     status = shard_status(out, verify=True)
     return int(np.count_nonzero(status != 1)), f"{int(np.count_nonzero(status == 1))} done in {out}"
 
@@ -196,15 +204,7 @@ def prepare_store(cfg: Config, out: str | Path, *, overwrite: bool = False) -> n
     if out.exists() and not overwrite:
         if root_metadata_lost(out):  # its config is lost with it: the arrays must match
             _create(cfg, out, attrs, overwrite=False)
-        stored = read_store_attrs(out)  # raises StoreError for a foreign path
-        old = json.loads(json.dumps(stored.get("config")))
-        new = json.loads(json.dumps(attrs["config"]))
-        if old != new:
-            diff = _first_difference(old, new) or "config"
-            raise ConfigError(
-                f"store {str(out)!r} was written with a different config (first difference: "
-                f"{diff}); use --overwrite to replace it, or choose another --out"
-            )
+        _check_same_config(out, attrs)
         # a driver killed mid-write (kill -9) leaves zarr's temporary files; we hold the lock
         # and no task runs yet, so every one of them is stale
         remove_partial_writes(out)
@@ -376,6 +376,7 @@ def _run_sweep(
     out = Path(out)
     t0 = time.perf_counter()
     remote = _connect(scheduler) if scheduler is not None else None  # fail before writing
+    existed = out.exists()
     try:
         with _sigint_deferred():  # a store is created whole: Ctrl-C waits for the metadata
             status = prepare_store(cfg, out, overwrite=overwrite)
@@ -386,7 +387,7 @@ def _run_sweep(
     pending = [int(i) for i in np.flatnonzero(status != 1)]
     summary = SweepSummary(store=str(out), n_shards=len(status), samples_per_shard=cfg.samples_per_run,
                            done_before=len(status) - len(pending))
-    if pending and summary.done_before < len(status):  # flags set on shards that failed checks
+    if existed and pending:  # done flags set on shards that failed their checksums
         flagged = shard_status(out)
         summary.damaged = [int(i) for i in np.flatnonzero((flagged == 1) & (status != 1))]
     summary.phase_seconds["prepare"] = time.perf_counter() - t0

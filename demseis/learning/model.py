@@ -460,8 +460,11 @@ def predict_file(model: Any, inp: str | Path, out: str | Path, *, device: str | 
         raise InputError(f"--out {str(out)!r} exists; pass --overwrite to replace it")
     if not (is_segy(out) or out.suffix == ".npy"):
         raise InputError(f"--out {str(out)!r}: name a .sgy, .segy or .npy file")
-    if is_segy(inp):
-        data = None if cube_geometry(inp) is not None else read_segy_section(inp)
+    cube = is_segy(inp) and cube_geometry(inp) is not None
+    if cube:
+        data = None
+    elif is_segy(inp):
+        data = read_segy_section(inp)
     elif inp.suffix == ".npy":
         if not inp.is_file():
             raise InputError(f"{str(inp)!r} does not exist")
@@ -474,7 +477,7 @@ def predict_file(model: Any, inp: str | Path, out: str | Path, *, device: str | 
     if is_segy(out) and not is_segy(inp):
         raise InputError(f"--out {str(out)!r}: SEG-Y output needs SEG-Y input (its headers)")
     net = load_model(model, device) if isinstance(model, (str, Path)) else model
-    if is_segy(inp) and cube_geometry(inp) is not None:
+    if cube:
         return predict_cube(net, inp, out, progress=progress)
     prob = predict_array(net, data)
     if is_segy(out):
