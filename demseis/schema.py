@@ -27,7 +27,7 @@ This module imports only NumPy, :mod:`demseis.registry` and :mod:`demseis.errors
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -93,6 +93,17 @@ class SampleArray:
     def np_dtype(self) -> np.dtype:
         return np.dtype(self.dtype)
 
+    def store_attributes(self) -> dict[str, Any]:
+        """The array's attributes in a store (JSON): the CF pair ``units`` and ``long_name``,
+        and under ``demseis`` its ``role``, ``fill``, ``valid_range`` (a list, or None) and
+        ``raw`` (stored uncompressed), so that the store describes the array without the code
+        that declared it (:func:`spec_from_attributes` reads them back)."""
+        rng = None if self.valid_range is None else list(self.valid_range)
+        fill = float(self.fill) if self.np_dtype.kind == "f" else int(self.fill)
+        return {"units": self.units, "long_name": self.description,
+                "demseis": {"role": self.role, "fill": fill, "valid_range": rng,
+                            "raw": not self.compressed}}
+
 
 #: every per-sample array, in store order (a store holds them in this order)
 SAMPLE_ARRAYS: Registry[SampleArray] = Registry("sample array", group="demseis.arrays",
@@ -123,6 +134,33 @@ for _a in (
 ):
     SAMPLE_ARRAYS.register(_a.name, _a)
 del _a
+
+
+def spec_from_attributes(name: str, dtype: Any, attrs: Mapping[str, Any]) -> SampleArray | None:
+    """The declaration of a stored array from its attributes (:meth:`SampleArray.store_attributes`),
+    without a producer; None when the attributes hold no ``demseis`` entry (a store written
+    before the arrays described themselves: its arrays are the registered built-ins).
+
+    Raises
+    ------
+    InputError
+        The attributes name a role, but are not a valid declaration (the message says why).
+    """
+    own = attrs.get("demseis")
+    if own is None:
+        return None
+    try:
+        rng = own.get("valid_range")
+        valid = None if rng is None else (int(rng[0]), None if rng[1] is None else int(rng[1]))
+        dt = np.dtype(dtype)
+        fill = own.get("fill", 0)
+        fill = float(fill) if dt.kind == "f" else int(fill)
+        return SampleArray(name, dt.name, str(own["role"]), str(attrs.get("units", "1")),
+                           str(attrs.get("long_name", name)), fill=fill, valid_range=valid,
+                           compressed=not own.get("raw", False))
+    except (TypeError, ValueError, IndexError, KeyError, AttributeError) as exc:
+        raise InputError(f"sample array {name!r}: its stored attributes are not a valid "
+                         f"declaration ({exc})") from None
 
 
 def register_array(spec: SampleArray) -> SampleArray:

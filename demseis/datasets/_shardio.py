@@ -31,7 +31,7 @@ import mmap
 import os
 import uuid
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -343,6 +343,8 @@ class ArrayMeta:
     key_separator : separator of the chunk key (``c/0/0/0``).
     categories : the names of the codes of a categorical parameter (its ``categories``
         attribute), else None.
+    attributes : the array's attributes (units, long_name, and for a sample array its role,
+        fill and valid range: :meth:`demseis.schema.SampleArray.store_attributes`).
     """
 
     path: str
@@ -354,6 +356,7 @@ class ArrayMeta:
     encoder: ChunkEncoder
     key_separator: str = "/"
     categories: tuple[str, ...] | None = None
+    attributes: Mapping[str, Any] = field(default_factory=dict)
 
     def chunk_key(self, coords: Sequence[int]) -> str:
         """Key (path below the array) of the chunk or shard file at grid position ``coords``."""
@@ -475,7 +478,8 @@ def array_meta(store: str | Path, name: str, meta: Mapping[str, Any]) -> ArrayMe
         cke = meta.get("chunk_key_encoding", {})
         codecs = list(meta["codecs"])
         fill = _fill_value(meta["fill_value"], dtype)
-        cats = (meta.get("attributes") or {}).get("categories")
+        attrs = dict(meta.get("attributes") or {})
+        cats = attrs.get("categories")
         cats = None if cats is None else tuple(str(c) for c in cats)
     except (KeyError, TypeError, ValueError) as exc:
         raise StoreError(f"{where}: unreadable metadata ({exc!r})") from None
@@ -495,9 +499,9 @@ def array_meta(store: str | Path, name: str, meta: Mapping[str, Any]) -> ArrayMe
             raise StoreError(f"{where}: a shard layout the direct writer does not encode "
                              f"({conf})")
         encoder = chunk_encoder(conf.get("codecs", ()), dtype, where)
-        return ArrayMeta(name, shape, dtype, inner, outer, fill, encoder, sep, cats)
+        return ArrayMeta(name, shape, dtype, inner, outer, fill, encoder, sep, cats, attrs)
     return ArrayMeta(name, shape, dtype, outer, None, fill, chunk_encoder(codecs, dtype, where),
-                     sep, cats)
+                     sep, cats, attrs)
 
 
 def is_fill(chunk: np.ndarray, fill_value: Any) -> bool:

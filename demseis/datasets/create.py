@@ -291,7 +291,7 @@ def _store_files(wanted: StoreLayout, param_specs: Mapping[str, ParamSpec],
             fill_value=fill_value_for(dtype),
             compressors=sample_compressors(spec),
             dimension_names=("sample", row_dim, "x"),
-            attributes={"units": spec.units, "long_name": spec.description},
+            attributes=spec.store_attributes(),
         )
     for name, spec in param_specs.items():
         specs[f"params/{name}"] = dict(

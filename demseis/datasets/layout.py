@@ -33,7 +33,7 @@ import numpy as np
 from demseis import __version__
 from demseis.datasets._shardio import ArrayMeta, array_meta
 from demseis.errors import InputError, StoreError
-from demseis.schema import SAMPLE_ARRAYS
+from demseis.schema import SAMPLE_ARRAYS, SampleArray, spec_from_attributes
 
 # zarr is imported inside the functions that use it: it takes ~0.3 s to import, and neither
 # ``import demseis.datasets`` nor a shard write (write_shard, which reads the metadata files
@@ -46,6 +46,10 @@ SCHEMA_VERSION = 2
 ``twt``, and ``x``), ``units`` and ``long_name`` on every array, categorical parameters with
 their category names, dimension names on the particle arrays.
 """
+
+
+#: root arrays that are not sample arrays: the done flags and the coordinates of the axes
+NOT_SAMPLE_ARRAYS = ("shard_done", "depth", "twt", "x")
 
 
 def fill_value_for(dtype: np.dtype) -> Any:
@@ -142,6 +146,8 @@ class StoreLayout:
     shape : (H, W) of one sample (rows = depth, columns = x).
     arrays : sample array name -> dtype, in store order.
     params : parameter name -> dtype, sorted by name.
+    specs : sample array name -> its declaration as the store describes it (role, units,
+        fill, valid range: :func:`sample_specs`); not compared by :meth:`describe_difference`.
     """
 
     n_shards: int
@@ -149,6 +155,7 @@ class StoreLayout:
     shape: tuple[int, int]
     arrays: dict[str, np.dtype] = field(default_factory=dict)
     params: dict[str, np.dtype] = field(default_factory=dict)
+    specs: dict[str, SampleArray] = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def n_samples(self) -> int:
@@ -275,6 +282,45 @@ def store_layout(group) -> StoreLayout:
     return layout_of(_array_members(group))
 
 
+def _attributes(member: Any) -> Mapping[str, Any]:
+    """Attributes of a zarr array or an :class:`ArrayMeta`."""
+    if isinstance(member, ArrayMeta):
+        return member.attributes
+    attrs = getattr(member, "attrs", None)
+    return {} if attrs is None else dict(attrs)
+
+
+def sample_specs(members: Mapping[str, Any]) -> dict[str, SampleArray]:
+    """The sample arrays among a store's root arrays, name -> declaration, in store order.
+
+    An array that describes itself (a ``demseis`` attribute, :meth:`SampleArray.store_attributes`)
+    is declared by its attributes, so an array a plug-in added reads, validates and trains
+    without the plug-in. An array without one (a store written before arrays described
+    themselves) is a sample array when its name is registered, with the registered
+    declaration. Order: the registered arrays in registry order, then the others by name.
+
+    Raises
+    ------
+    StoreError
+        An array's attributes name a role but are not a valid declaration.
+    """
+    out: dict[str, SampleArray] = {}
+    for name, member in members.items():
+        if "/" in name or name in NOT_SAMPLE_ARRAYS:
+            continue
+        try:
+            spec = spec_from_attributes(name, member.dtype, _attributes(member))
+        except InputError as exc:
+            raise StoreError(str(exc)) from None
+        if spec is None and name in SAMPLE_ARRAYS:
+            spec = SAMPLE_ARRAYS.get(name)
+        if spec is not None:
+            out[name] = spec
+    known = SAMPLE_ARRAYS.names()
+    order = [n for n in known if n in out] + sorted(n for n in out if n not in known)
+    return {n: out[n] for n in order}
+
+
 def layout_of(members: Mapping[str, Any]) -> StoreLayout:
     """:func:`store_layout` from the arrays :func:`_array_members` or :func:`array_metas`
     read (anything with ``shape``, ``dtype``, ``chunks`` and ``shards`` like a zarr array)."""
@@ -284,9 +330,8 @@ def layout_of(members: Mapping[str, Any]) -> StoreLayout:
     arrays: dict[str, np.dtype] = {}
     shape = None
     samples_per_shard = None
-    for name in SAMPLE_ARRAYS.names():
-        if name not in members:
-            continue
+    specs = sample_specs(members)
+    for name in specs:
         arr = members[name]
         arrays[name] = np.dtype(arr.dtype)
         s = int(arr.shards[0]) if arr.shards is not None else int(arr.chunks[0])
@@ -304,7 +349,7 @@ def layout_of(members: Mapping[str, Any]) -> StoreLayout:
     for name in sorted(members):
         if name.startswith("params/"):
             params[name[len("params/"):]] = np.dtype(members[name].dtype)
-    return StoreLayout(n_shards, int(samples_per_shard), shape, arrays, params)
+    return StoreLayout(n_shards, int(samples_per_shard), shape, arrays, params, specs)
 
 
 # --------------------------------------------------------------------------------------------

@@ -17,11 +17,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from demseis.datasets.checked import CheckedArray
-from demseis.datasets.layout import open_store
+from demseis.datasets.layout import open_store, store_layout
 from demseis.datasets.status import shard_status
 from demseis.datasets.table import FullParams, read_done_params
 from demseis.errors import InputError, StoreError
-from demseis.schema import SAMPLE_ARRAYS
 from demseis.seismic.segy import write_segy
 
 
@@ -176,7 +175,7 @@ def _fmt(v: object) -> str:
 
 def store_summary(path: str | Path) -> list[str]:
     """Lines describing a store: samples, its sample arrays (with their role, units and
-    description from :data:`demseis.schema.SAMPLE_ARRAYS`), parameter ranges over done
+    description as the store declares them), parameter ranges over done
     samples, config and failed runs (what ``demseis info`` prints)."""
     root = open_store(path)
     attrs = dict(root.attrs)
@@ -191,11 +190,10 @@ def store_summary(path: str | Path) -> list[str]:
     grid = attrs.get("grid", {})
     lines.append(f"grid: {h} x {w} cells of {grid.get('cell_m')} m")
     lines.append("sample arrays (role, units: description):")
-    for name, spec in SAMPLE_ARRAYS.items():
-        if name in root:
-            a = root[name]
-            lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks "
-                         f"{tuple(a.chunks)}  {spec.role}, {spec.units}: {spec.description}")
+    for name, spec in store_layout(root).specs.items():
+        a = root[name]
+        lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks "
+                     f"{tuple(a.chunks)}  {spec.role}, {spec.units}: {spec.description}")
     lines.append("parameters (over done samples):")
     table = read_done_params(path)
     for name, vals in table.values.items():

@@ -30,9 +30,9 @@ from demseis.datasets.layout import (
     check_store_metadata,
     layout_of,
     open_store,
+    sample_specs,
 )
 from demseis.errors import StoreError
-from demseis.schema import SAMPLE_ARRAYS
 
 
 @dataclass(frozen=True)
@@ -153,7 +153,7 @@ def _read_through_zarr(path: Path, members: Mapping[str, ArrayMeta]) -> DonePara
     """:func:`read_done_params` of a store laid out otherwise (assembled by hand with zarr:
     other chunks, no checksums): every parameter read whole through zarr."""
     root = open_store(path, "r")
-    sample_names = [n for n in SAMPLE_ARRAYS.names() if n in members]
+    sample_names = list(sample_specs(members))
     if not sample_names or "shard_done" not in members:
         raise StoreError(f"store {str(path)!r} has no sample arrays or no 'shard_done' array: "
                          "it is incomplete or not a demseis store")

@@ -30,7 +30,7 @@ from demseis.datasets.layout import (
 )
 from demseis.datasets.particles import particle_group_name, read_particles
 from demseis.errors import StoreError
-from demseis.schema import sample_array
+from demseis.schema import SampleArray
 
 _GRID_KEYS = ("x0_m", "top_m", "cell_m", "nz", "nx")
 
@@ -71,8 +71,10 @@ class ValidationReport:
         return text + (", ok" if self.ok else f", {n} problem{'' if n == 1 else 's'}")
 
 
-def _check_array(name: str, values: np.ndarray, shard: int, s0: int) -> list[str]:
-    """Problems of one done shard's slice of sample array ``name``."""
+def _check_array(spec: SampleArray, values: np.ndarray, shard: int, s0: int) -> list[str]:
+    """Problems of one done shard's slice of the sample array ``spec`` declares (as the store
+    describes it)."""
+    name = spec.name
     out = []
     if values.dtype.kind == "f":
         bad = ~np.isfinite(values)
@@ -87,7 +89,7 @@ def _check_array(name: str, values: np.ndarray, shard: int, s0: int) -> list[str
     missing = (values == fill).all(axis=(1, 2))
     if missing.any():
         out.append(f"shard {shard}: {name} samples {_fmt(np.nonzero(missing)[0] + s0)} were never written")
-    lo, hi = sample_array(name).valid_range or (None, None)
+    lo, hi = spec.valid_range or (None, None)
     if lo is not None:
         hi_v = np.iinfo(values.dtype).max if hi is None else hi
         bad = (values < lo) | (values > hi_v)
@@ -211,7 +213,7 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
         damage = shard_damage(path, k, group, layout)  # checksums: names every damaged sample
         problems.extend(damage)
         for name, values in _intact(group, layout.arrays, "", k, sel, damage, problems):
-            problems.extend(_check_array(name, values, k, sel.start))
+            problems.extend(_check_array(layout.specs[name], values, k, sel.start))
         pvals: dict[str, np.ndarray] = {}
         for name, v in _intact(pgroup, layout.params, "parameter ", k, sel, damage, problems):
             dtype = layout.params[name]

@@ -22,7 +22,7 @@ from demseis.datasets._shardio import ArrayMeta, write_block
 from demseis.datasets.layout import array_metas, check_store_metadata, fill_value_for, layout_of
 from demseis.datasets.particles import write_particles
 from demseis.errors import InputError
-from demseis.schema import sample_array
+from demseis.schema import SampleArray
 from demseis.types import Snapshot
 
 
@@ -46,7 +46,7 @@ def write_shard(
     path : store directory (created by :func:`~demseis.datasets.create.create_store`).
     shard_index : k in ``[0, n_shards)``; the shard holds samples ``[k*S, (k+1)*S)``.
     arrays : every sample array of the store, name -> (S, H, W) array. Float arrays must be
-        finite; integer arrays integers within their declared ``valid_range``
+        finite; integer arrays integers within their ``valid_range`` as the store declares it
         (:class:`demseis.schema.SampleArray`).
     params : every parameter of the store, name -> (S,) array (or a scalar, broadcast).
         Integer values must fit the dtype exactly; float values must not be NaN (inf is
@@ -82,7 +82,8 @@ def write_shard(
             f"params must be exactly {sorted(layout.params)} (the store's parameters), "
             f"got {sorted(params)}"
         )
-    data = {n: _as_sample_array(n, arrays[n], dt, shape) for n, dt in layout.arrays.items()}
+    data = {n: _as_sample_array(layout.specs[n], arrays[n], dt, shape)
+            for n, dt in layout.arrays.items()}
     pdata = {n: _as_param_array(n, params[n], dt, s) for n, dt in layout.params.items()}
     if "run_id" in pdata:
         ids = np.unique(pdata["run_id"])
@@ -109,7 +110,9 @@ def write_shard(
     _set_flag(path, done, k, 1)
 
 
-def _as_sample_array(name: str, value: Any, dtype: np.dtype, shape: tuple[int, ...]) -> np.ndarray:
+def _as_sample_array(spec: SampleArray, value: Any, dtype: np.dtype,
+                     shape: tuple[int, ...]) -> np.ndarray:
+    name = spec.name
     arr = np.asarray(value)
     if arr.shape != shape:
         raise InputError(f"array {name!r} has shape {arr.shape}, expected {shape}")
@@ -122,7 +125,7 @@ def _as_sample_array(name: str, value: Any, dtype: np.dtype, shape: tuple[int, .
         return out
     if arr.dtype.kind not in "iub":
         raise InputError(f"label array {name!r} has dtype {arr.dtype}, expected integers")
-    lo, hi = sample_array(name).valid_range or (np.iinfo(dtype).min, np.iinfo(dtype).max)
+    lo, hi = spec.valid_range or (np.iinfo(dtype).min, np.iinfo(dtype).max)
     hi = int(np.iinfo(dtype).max) if hi is None else hi
     if arr.size and (arr.min() < lo or arr.max() > hi):
         raise InputError(

@@ -173,6 +173,12 @@ def test_a_plugin_named_in_the_config_reaches_the_dask_workers(tmp_path):
     np.testing.assert_array_equal(parity, ((layer >= 0) & (layer % 2 == 1)).astype(np.uint8))
     assert "layer_parity" not in SAMPLE_ARRAYS       # this process never imported the plug-in
     assert root.attrs["config"]["plugins"] == ["tests.generator._plugin"]
+    # the store describes the plug-in's array: it reads and validates without the plug-in
+    from demseis.datasets import read_layout, validate_store
+
+    spec = read_layout(out).specs["layer_parity"]
+    assert (spec.role, spec.valid_range, spec.description) == ("label", (0, 1), "1 on odd layers")
+    assert validate_store(out).ok
 
 
 def test_a_module_attribute_engine_and_bad_plugins_are_config_errors():
