@@ -69,6 +69,33 @@ def _noise(name, value):
     return math.inf if rms == 0 else 20 * math.log10(np.sqrt(np.mean(x ** 2)) / rms)
 
 
+def _wavelet_field(name, value):
+    from demseis.seismic import Wavelet
+
+    field = {"band_octaves": "band_octaves", "wavelet_phase_deg": "phase_deg"}[name]
+    w = Wavelet("ormsby", 30.0, **{field: value})
+    assert np.isfinite(w.samples(0.002, 0.2)).all()
+    return getattr(w, field)
+
+
+def _noise_slope(name, value):
+    from demseis.seismic import add_noise
+
+    x = np.sin(np.arange(2000.0) / 3.0).reshape(200, 10)
+    noisy = add_noise(x, 0.0, "coloured", np.random.default_rng(0), slope=value)
+    assert np.isfinite(noisy).all()
+    return value
+
+
+def _processing(name, value):
+    from demseis.seismic import Processing, process
+
+    proc = Processing.of({name: value})
+    x = np.sin(np.arange(2000.0) / 3.0).reshape(200, 10)
+    assert np.isfinite(process(x, proc, np.random.default_rng(0))).all()
+    return getattr(proc, name)
+
+
 def _psf(name, value):
     from demseis.seismic import psf_sections
 
@@ -113,6 +140,13 @@ STAGE = {
     "cell_m": _grid,
     "psf_max_angle_deg": _psf,
     "psf_aperture_m": _psf,
+    "band_octaves": _wavelet_field,
+    "wavelet_phase_deg": _wavelet_field,
+    "noise_slope": _noise_slope,
+    **{name: _processing for name in ("linear_noise_snr_db", "linear_noise_slope",
+                                      "trace_gain_jitter", "footprint_amplitude",
+                                      "footprint_period_traces", "agc_window_samples",
+                                      "clip_percentile", "quantise_bits")},
 }
 #: numeric parameters only the generator consumes (its config checks are the only ones)
 GENERATOR_ONLY = {"seed", "n_runs", "renders_per_snapshot", "fault_x_frac", "n_layers",
@@ -189,7 +223,8 @@ def test_stage_refuses_just_outside_its_domain(name):
     domain where one is declared (the DEM's mechanics); stages that accept a superset of what
     they declare, like the wavelet's any f > 0, are skipped."""
     p = PARAMS[name].stage()
-    if STAGE[name] in (_wavelet, _noise, _grid, _psf) or name == "throw_m":
+    if STAGE[name] in (_wavelet, _noise, _grid, _psf, _wavelet_field, _noise_slope,
+                       _processing) or name == "throw_m":
         pytest.skip("this stage accepts a superset of the declared range")
     for bound in (p.lo, p.hi):
         if bound is None or bound == math.inf:

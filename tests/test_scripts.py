@@ -88,3 +88,18 @@ def test_stretch_figure_renders(tmp_path):
                          cwd=root).stdout
     assert int(out.split(": ")[1].split()[0]) >= 3
     assert (tmp_path / "s.png").stat().st_size > 20_000
+
+
+@pytest.mark.slow
+def test_survey_look_figure_renders(tmp_path):
+    """scripts/survey_look_figure.py: one section under each wavelet, noise and processing."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, str(SCRIPTS / "survey_look_figure.py"),
+                          "--out", str(tmp_path / "s.png")], check=True, capture_output=True,
+                         text=True, env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"},
+                         cwd=root).stdout
+    assert out.count(": rms ") == 12
+    assert (tmp_path / "s.png").stat().st_size > 50_000

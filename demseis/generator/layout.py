@@ -21,7 +21,7 @@ from demseis.types import Grid
 #: these parameters were added, so that a store keeps its bytes; a new ``str`` parameter goes
 #: after them
 _CODES_ORDER = ("noise_kind", "dip_direction", "contact_model", "imaging", "structure",
-                "fault_kind", "fold_kind")
+                "fault_kind", "fold_kind", "wavelet", "wavelet_phase")
 
 
 def param_codes() -> dict[str, tuple[str, ...]]:

@@ -10,7 +10,7 @@ parameter arrays. Which arrays, their dtypes and fills come from :mod:`demseis.s
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass
 from typing import Any
 
 import numpy as np
@@ -32,6 +32,8 @@ from demseis.registry import FAULT_STYLES, RENDERINGS
 from demseis.schema import SAMPLE_ARRAYS, engine_labels
 from demseis.seismic import (add_noise, coarse_velocity, imaged_sections, imaging_mode,
                              strata_properties)
+from demseis.seismic.processing import Processing, process
+from demseis.seismic.wavelet import Wavelet
 from demseis.types import Snapshot
 
 
@@ -104,17 +106,19 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
     domain = "depth" if t_s is None else "time"
     # one imaging call per (mode, options key), all its frequencies at once; the first render
     # of a group carries the group's mode and options
-    wanted: dict[tuple, tuple[Render, set[float]]] = {}
+    wanted: dict[tuple, tuple[Render, set[Wavelet]]] = {}
     for r in renders:
-        wanted.setdefault(_imaging_key(r), (r, set()))[1].add(r.freq_hz)
+        wanted.setdefault(_imaging_key(r), (r, set()))[1].add(r.wavelet)
     images = {}
-    for key, (first, fset) in wanted.items():
-        freqs = sorted(fset)
-        secs = imaged_sections(first.imaging, img.vp, img.rho, img.dz_m, freqs, domain,
+    for key, (first, wset) in wanted.items():
+        wavelets = sorted(wset, key=astuple)
+        # a zero-phase Ricker goes to the imaging mode as its frequency, as it always has
+        bank = [w.freq_hz if w.is_plain_ricker else w for w in wavelets]
+        secs = imaged_sections(first.imaging, img.vp, img.rho, img.dz_m, bank, domain,
                                t_s=t_s, col_step_m=img.col_step_m,
                                rows_per_cell=img.substeps if domain == "depth" else 1,
                                **first.values)
-        images.update({(key, f): sec for f, sec in zip(freqs, secs)})
+        images.update({(key, w): sec for w, sec in zip(wavelets, secs)})
     impedance = img.impedance
     vp = img.vp_cell
     style: FaultStyle = FAULT_STYLES.get(cfg.labels.fault_style)
@@ -134,10 +138,12 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
     rendered = {"impedance": impedance}
     codes = param_codes()
     for r in renders:
-        clean = images[(_imaging_key(r), r.freq_hz)]
+        clean = images[(_imaging_key(r), r.wavelet)]
         i = r.sample
-        arrays["seismic"][i] = add_noise(clean, r.snr_db, r.noise_kind,
-                                         np.random.default_rng(r.seed))
+        rng = np.random.default_rng(r.seed)
+        noisy = add_noise(clean, r.snr_db, r.noise_kind, rng,
+                          float(r.values.get("noise_slope", 1.0)))
+        arrays["seismic"][i] = process(noisy, Processing.of(r.values), rng, clean)
         for name in arrays:
             if name != "seismic":
                 arrays[name][i] = maps[name] if name in maps else rendered[name]

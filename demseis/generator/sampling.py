@@ -25,6 +25,7 @@ import numpy as np
 from demseis.generator.config import Config, _cross
 from demseis.generator.params import DistSpec, Fixed, GridSpec
 from demseis.parameters import SCENARIO
+from demseis.seismic.wavelet import Wavelet
 
 #: second spawn key of a run's seed tree (values fixed: changing one changes every dataset)
 SEED_RUN_PARAMS = 0
@@ -85,6 +86,14 @@ class Render:
     @property
     def imaging(self) -> str:
         return str(self.values["imaging"])
+
+    @property
+    def wavelet(self) -> Wavelet:
+        """The sample's source wavelet (a zero-phase Ricker of ``freq_hz`` by default)."""
+        v = self.values
+        return Wavelet(str(v.get("wavelet", "ricker")), float(v["freq_hz"]),
+                       float(v.get("band_octaves", 2.0)), float(v.get("wavelet_phase_deg", 0.0)),
+                       str(v.get("wavelet_phase", "zero")))
 
 
 @dataclass(frozen=True)

@@ -40,12 +40,14 @@ from demseis.seismic.imaging import ImagingMode, imaged_sections, imaging_mode
 from demseis.seismic.psf import psf_sections
 from demseis.seismic.raster import rasterise
 from demseis.seismic.strata import BedModel, Strata, draw_strata, strata_properties
-from demseis.seismic.wavelet import ricker
+from demseis.seismic.processing import Processing, process
+from demseis.seismic.wavelet import Wavelet, estimate_wavelet, ricker
 
 __all__ = [
     "rasterise", "ricker", "reflectivity", "impedance", "convolve", "PropertyModel",
     "LayerProperties", "draw_layer_properties", "element_properties", "property_grids", "smooth",
     "synthetic_sections", "interface_times", "coarse_velocity", "time_axis", "depth_to_time",
     "add_noise", "rms", "snr_db", "psf_sections", "imaged_sections", "ImagingMode", "imaging_mode", "BedModel",
-    "Strata", "draw_strata", "strata_properties",
+    "Strata", "draw_strata", "strata_properties", "Wavelet", "estimate_wavelet", "Processing",
+    "process",
 ]

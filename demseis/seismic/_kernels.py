@@ -191,6 +191,41 @@ def median_filter_square(a, size, out):
 
 
 @njit(cache=True)
+def _convolve_column(ts, a, t_col, tab, ih, hw, even, out_row):
+    """One column of :func:`convolve_spikes` (``even``) or :func:`convolve_spikes_table`:
+    ``out_row[q] = sum_i a[i] w(t_col[q] - ts[i])`` over ``|t - ts| < hw``. The spikes in
+    each output's window are found with two moving pointers (both series ascend), then
+    summed in a branch-free loop; ``u`` is the table coordinate, ``|t - ts| / step`` for an
+    even table on [0, hw], ``(t - ts + hw) / step`` for a table on [-hw, hw]."""
+    m = ts.shape[0]
+    ntab = tab.shape[0]
+    lo = 0
+    hi = 0
+    for q in range(t_col.shape[0]):
+        t = t_col[q]
+        while lo < m and ts[lo] <= t - hw:
+            lo += 1
+        if hi < lo:
+            hi = lo
+        while hi < m and ts[hi] < t + hw:
+            hi += 1
+        s = 0.0
+        if even:
+            for i in range(lo, hi):
+                u = abs(t - ts[i]) * ih
+                p = min(int(u), ntab - 2)
+                w0 = tab[p]
+                s += a[i] * (w0 + (u - p) * (tab[p + 1] - w0))
+        else:
+            for i in range(lo, hi):
+                u = (t - ts[i] + hw) * ih
+                p = min(max(int(u), 0), ntab - 2)
+                w0 = tab[p]
+                s += a[i] * (w0 + (u - p) * (tab[p + 1] - w0))
+        out_row[q] = s
+
+
+@njit(cache=True)
 def convolve_spikes(t_spike, amp, t_out, tables, inv_step, half_s, out):
     """Continuous-time convolution of per-column spike trains with tabulated even wavelets.
 
@@ -211,38 +246,23 @@ def convolve_spikes(t_spike, amp, t_out, tables, inv_step, half_s, out):
     inv_step : (nf,) float64 reciprocal of the table step (1/s).
     half_s : (nf,) float64 wavelet half-width (s); beyond it the wavelet is taken as zero.
     out : (nf, nx, k) float64 output, written.
-
-    The spikes within the window of each output are found with two moving pointers (both time
-    series ascend), then summed in a branch-free loop.
     """
-    nx, m = t_spike.shape
-    k = t_out.shape[1]
-    nf = tables.shape[0]
-    ntab = tables.shape[1]
-    for f in range(nf):
-        hw = half_s[f]
-        ih = inv_step[f]
-        tab = tables[f]
-        for c in range(nx):
-            ts = t_spike[c]
-            a = amp[c]
-            lo = 0
-            hi = 0
-            for q in range(k):
-                t = t_out[c, q]
-                while lo < m and ts[lo] <= t - hw:
-                    lo += 1
-                if hi < lo:
-                    hi = lo
-                while hi < m and ts[hi] < t + hw:
-                    hi += 1
-                s = 0.0
-                for i in range(lo, hi):
-                    u = abs(t - ts[i]) * ih
-                    p = min(int(u), ntab - 2)
-                    w0 = tab[p]
-                    s += a[i] * (w0 + (u - p) * (tab[p + 1] - w0))
-                out[f, c, q] = s
+    for f in range(tables.shape[0]):
+        for c in range(t_spike.shape[0]):
+            _convolve_column(t_spike[c], amp[c], t_out[c], tables[f], inv_step[f], half_s[f],
+                             True, out[f, c])
+
+
+@njit(cache=True)
+def convolve_spikes_table(t_spike, amp, t_out, table, inv_step, half_s, out):
+    """:func:`convolve_spikes` for one wavelet of any symmetry, tabulated on ``[-half, half]``.
+
+    ``out[c, q] = sum_i amp[c, i] * w(t_out[c, q] - t_spike[c, i])`` over
+    ``|t - t_spike| < half_s``, with ``table[p] = w(-half_s + p / inv_step)`` for
+    p = 0..ntab-1 (linear interpolation). ``out`` : (nx, k) float64, written.
+    """
+    for c in range(t_spike.shape[0]):
+        _convolve_column(t_spike[c], amp[c], t_out[c], table, inv_step, half_s, False, out[c])
 
 
 @njit(cache=True)

@@ -33,7 +33,7 @@ import numpy as np
 
 from demseis.errors import InputError
 from demseis.seismic import _kernels
-from demseis.seismic.wavelet import _check_freqs, ricker_table
+from demseis.seismic.wavelet import Wavelet, as_wavelets, ricker_table
 
 TABLE_SIZE = 8192
 """Entries of the tabulated wavelet used by the convolution kernel."""
@@ -261,10 +261,11 @@ def depth_to_time(field: np.ndarray, vp_g: np.ndarray, cell_m: float, t_s: np.nd
 
 
 def synthetic_sections(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
-                       freqs_hz: float | Sequence[float], domain: str = "depth", *,
+                       freqs_hz: float | Wavelet | Sequence[float | Wavelet],
+                       domain: str = "depth", *,
                        t_s: np.ndarray | None = None,
                        col_step_m: float | None = None, rows_per_cell: int = 1) -> np.ndarray:
-    """Noise-free zero-phase Ricker sections of a property grid, one per frequency.
+    """Noise-free sections of a property grid, one per wavelet (zero-phase Rickers by default).
 
     Impedance ``Z = rho vp``, reflectivity ``(Z2 - Z1)/(Z2 + Z1)`` between vertically
     adjacent cells, placed at the two-way time of the interface computed from the Vp column,
@@ -276,7 +277,10 @@ def synthetic_sections(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
     ----------
     vp_g, rho_g : (nz, nx) Vp (m/s) and density (kg/m^3), row 0 at the top.
     cell_m : cell size (m).
-    freqs_hz : one frequency or a sequence (Hz): a wavelet bank rendered in one pass.
+    freqs_hz : one frequency or a sequence (Hz): a bank of zero-phase Rickers rendered in one
+        pass; an item may be a :class:`~demseis.seismic.wavelet.Wavelet` instead (another
+        family, a phase rotation, minimum phase), convolved from its table on [-half, half]
+        (:meth:`Wavelet.table`; linear interpolation within about 1e-4 of its peak).
     domain : ``"depth"`` (default, pixel-aligned with the grid) or ``"time"``.
     t_s : (nt,) ascending TWT axis (s) for ``domain="time"`` (required there; build it once
         per sweep with :func:`time_axis` so all samples share a shape). Ignored for depth.
@@ -291,7 +295,7 @@ def synthetic_sections(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
     (nf, nz // rows_per_cell, nx) float32 for depth, (nf, nt, nx) float32 for time.
     """
     vp, rho = _check_grids(vp_g, rho_g, cell_m)
-    freqs = _check_freqs(freqs_hz)
+    wavelets = as_wavelets(freqs_hz)
     nz, nx = vp.shape
     t_bottom, t_centre = interface_times(vp, cell_m)
     refl = reflectivity(vp * rho, axis=0)
@@ -312,11 +316,20 @@ def synthetic_sections(vp_g: np.ndarray, rho_g: np.ndarray, cell_m: float,
         t_out = np.ascontiguousarray(np.broadcast_to(t, (nx, t.size)))
     else:
         raise InputError(f"domain must be 'depth' or 'time', got {domain!r}")
-    tables = np.empty((freqs.size, TABLE_SIZE))
-    inv_step = np.empty(freqs.size)
-    half = np.empty(freqs.size)
-    for k, f in enumerate(freqs):
-        tables[k], inv_step[k], half[k] = ricker_table(float(f), TABLE_SIZE)
-    out = np.empty((freqs.size, nx, t_out.shape[1]))
-    _kernels.convolve_spikes(t_spike, amp, t_out, tables, inv_step, half, out)
+    out = np.empty((len(wavelets), nx, t_out.shape[1]))
+    plain = [k for k, w in enumerate(wavelets) if w.is_plain_ricker]
+    if plain:          # the analytic Rickers: one pass over the even tables
+        tables = np.empty((len(plain), TABLE_SIZE))
+        inv_step = np.empty(len(plain))
+        half = np.empty(len(plain))
+        for i, k in enumerate(plain):
+            tables[i], inv_step[i], half[i] = ricker_table(wavelets[k].freq_hz, TABLE_SIZE)
+        bank = out if len(plain) == len(wavelets) else np.empty((len(plain),) + out.shape[1:])
+        _kernels.convolve_spikes(t_spike, amp, t_out, tables, inv_step, half, bank)
+        if bank is not out:
+            out[plain] = bank
+    for k, w in enumerate(wavelets):
+        if not w.is_plain_ricker:
+            table, inv, hw = w.table()
+            _kernels.convolve_spikes_table(t_spike, amp, t_out, table, inv, hw, out[k])
     return np.ascontiguousarray(out.transpose(0, 2, 1), dtype=np.float32)

@@ -11,7 +11,7 @@ import numpy as np
 
 from demseis.errors import InputError
 
-NOISE_KINDS = ("white", "band")
+NOISE_KINDS = ("white", "band", "coloured")
 
 
 def rms(a: np.ndarray, axis=None) -> np.ndarray:
@@ -31,8 +31,8 @@ def snr_db(signal: np.ndarray, noisy: np.ndarray) -> float:
 
 
 def add_noise(section: np.ndarray, snr_db: float, kind: str,
-              rng: np.random.Generator) -> np.ndarray:
-    """Add white or band-limited Gaussian noise at exactly the requested SNR.
+              rng: np.random.Generator, slope: float = 1.0) -> np.ndarray:
+    """Add white, band-limited or coloured Gaussian noise at exactly the requested SNR.
 
     Parameters
     ----------
@@ -41,8 +41,11 @@ def add_noise(section: np.ndarray, snr_db: float, kind: str,
     snr_db : requested SNR in dB; ``inf`` returns an unchanged copy.
     kind : ``"white"``: independent N(0, 1) samples; ``"band"``: white noise filtered along
         depth/time by the section's own mean amplitude spectrum (zero phase, circular, so the
-        noise is stationary and has the band of the signal, whatever wavelet made it).
+        noise is stationary and has the band of the signal, whatever wavelet made it);
+        ``"coloured"``: white noise filtered along depth/time to a power spectral density
+        proportional to ``f**-slope`` (1: pink, 2: brown; the zero-frequency term removed).
     rng : random generator (the only source of randomness).
+    slope : the coloured noise's spectral slope (>= 0); unused by the other kinds.
 
     Returns
     -------
@@ -61,6 +64,8 @@ def add_noise(section: np.ndarray, snr_db: float, kind: str,
         raise InputError(f"snr_db must be a number (dB) or inf, got {snr_db!r}") from None
     if math.isnan(snr) or snr == -math.inf:
         raise InputError(f"snr_db must be a finite number of dB or +inf, got {snr_db!r}")
+    if not (math.isfinite(slope) and slope >= 0):
+        raise InputError(f"noise slope must be a finite number >= 0, got {slope!r}")
     out_dtype = x.dtype if np.issubdtype(x.dtype, np.floating) else np.float64
     if snr == math.inf:
         return x.astype(out_dtype, copy=True)
@@ -70,6 +75,12 @@ def add_noise(section: np.ndarray, snr_db: float, kind: str,
         spec = np.fft.rfft(xs, axis=-2)
         shape = np.sqrt(np.mean(np.abs(spec) ** 2, axis=-1, keepdims=True))
         noise = np.fft.irfft(np.fft.rfft(noise, axis=-2) * shape, n=xs.shape[-2], axis=-2)
+    elif kind == "coloured":
+        n = xs.shape[-2]
+        f = np.fft.rfftfreq(n)
+        shape = np.zeros(f.size)
+        shape[1:] = f[1:] ** (-slope / 2.0)
+        noise = np.fft.irfft(np.fft.rfft(noise, axis=-2) * shape[:, None], n=n, axis=-2)
     s_rms = rms(xs, axis=(-2, -1))
     n_rms = rms(noise, axis=(-2, -1))
     with np.errstate(invalid="ignore", divide="ignore"):

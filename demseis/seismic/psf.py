@@ -82,7 +82,7 @@ from demseis.errors import InputError
 from demseis.seismic import _kernels
 from demseis.seismic.forward import (_check_grids, coarse_velocity, interface_times,
                                      synthetic_sections)
-from demseis.seismic.wavelet import _check_freqs, ricker_half_width_s
+from demseis.seismic.wavelet import as_wavelets
 
 # scipy.fft is imported inside the functions that use it: it takes ~0.2 s to import, only PSF
 # imaging needs it, and `import demseis.seismic` loads no scipy submodule
@@ -336,13 +336,13 @@ def psf_plan(vp_g: np.ndarray, cell_m: float, freqs_hz: float | Sequence[float],
     if not (math.isfinite(col) and col > 0):
         raise InputError(f"col_step_m must be a trace spacing > 0 m, got {col_step_m!r}")
     vp = np.asarray(vp_g, dtype=np.float64)
-    freqs = _check_freqs(freqs_hz)
+    wavelets = as_wavelets(freqs_hz)
     _check_angle(max_angle_deg, taper_deg, aperture_m)
     varying = domain == "time" or np.isfinite(aperture_m)
     k = n_windows if n_windows is not None else (4 if varying else 1)
     if not (isinstance(k, (int, np.integer)) and k >= 1):
         raise InputError(f"n_windows must be a positive integer, got {n_windows!r}")
-    half = ricker_half_width_s(float(freqs.min()))
+    half = max(w.half_width_s() for w in wavelets)
     if domain == "depth":
         nodes, _ = node_weights(vp.shape[0], k)
         angles = node_angles_deg((nodes + 0.5) * cell_m, max_angle_deg, aperture_m)
