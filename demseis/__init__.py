@@ -8,6 +8,7 @@ The front door (:mod:`demseis.api`)::
     result = demseis.score(pred, store)              # precision / recall / F1 / IoU / AP
     demseis.train(store, out="model.pt")             # a U-Net (needs demseis[torch])
     demseis.predict("model.pt", "in.sgy", out="out.sgy")  # fault probability of any section
+    demseis.fit("survey.sgy", out="survey.toml")     # a config that looks like a survey
 
 Importing :mod:`demseis` is light: it does not import torch, dask, matplotlib or even NumPy;
 the names above load on first use. Subpackages, in data-flow order:
@@ -34,15 +35,22 @@ from demseis.errors import DemseisError
 
 __version__ = "0.1.0"
 
-__all__ = ["DemseisError", "Store", "__version__", "generate", "open", "predict", "score", "train"]
+__all__ = ["DemseisError", "Store", "__version__", "fit", "generate", "open", "predict", "score",
+           "train"]
 
 _API = ("Store", "generate", "open", "predict", "score", "train")
 
 if TYPE_CHECKING:  # pragma: no cover
     from demseis.api import Store, generate, open, predict, score, train  # noqa: A004
+    from demseis.survey_fit import fit
 
 
 def __getattr__(name: str) -> Any:
+    if name == "fit":
+        # lazy: demseis.fit(sections, out=...) -> FitResult (demseis.survey_fit)
+        from demseis.survey_fit import fit
+
+        return fit
     if name in _API:
         # lazy: the front door; `import demseis` must not import NumPy (tests/test_import.py)
         from demseis import api
@@ -52,4 +60,4 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_API))
+    return sorted(set(globals()) | set(_API) | {"fit"})

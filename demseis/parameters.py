@@ -368,6 +368,9 @@ _DECLARED: tuple[Param, ...] = (
        doc="time shift per trace of the coherent linear noise (its apparent dip)"),
     _p("trace_gain_jitter", float, "sample", 0.0, 0.0, 2.0,
        doc="standard deviation of the natural log of each trace's gain; 0 = none"),
+    _p("time_gain_jitter", float, "sample", 0.0, 0.0, 2.0,
+       doc="standard deviation of the natural log of a gain varying smoothly down the section "
+           "(bright and dim intervals, heavier-tailed amplitudes); 0 = none"),
     _p("footprint_amplitude", float, "sample", 0.0, 0.0, 1.0,
        doc="relative amplitude of acquisition-footprint stripes along the traces; 0 = none"),
     _p("footprint_period_traces", float, "sample", 10.0, 2.0, 1000.0, unit="traces",

@@ -28,7 +28,7 @@ RANK = {
     "datasets": 4,
     "evaluation": 5,
     "generator": 6, "learning": 6,
-    "api": 7, "plotting": 7, "diagnostics": 7,
+    "api": 7, "plotting": 7, "diagnostics": 7, "survey_fit": 7,
     "cli": 8, "__main__": 9,
 }
 #: the modules outside ``demseis/diagnostics`` that may import it, and only inside a function

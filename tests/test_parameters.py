@@ -144,7 +144,8 @@ STAGE = {
     "wavelet_phase_deg": _wavelet_field,
     "noise_slope": _noise_slope,
     **{name: _processing for name in ("linear_noise_snr_db", "linear_noise_slope",
-                                      "trace_gain_jitter", "footprint_amplitude",
+                                      "trace_gain_jitter", "time_gain_jitter",
+                                      "footprint_amplitude",
                                       "footprint_period_traces", "agc_window_samples",
                                       "clip_percentile", "quantise_bits")},
 }

@@ -109,6 +109,30 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
                    help="a line printed under the figure, e.g. the field data's licence")
     r.set_defaults(func=_realism_command)
 
+    f = sub.add_parser(
+        "fit",
+        help="a config whose sections look like a survey's (sampling, wavelet, noise)",
+        description="Measure one or more sections of a survey (SEG-Y; a .png display image or "
+        ".npy with --dt-ms and --trace-spacing-m): sampling from the headers, the band, "
+        "dominant frequency and phase of the wavelet, noise level, amplitude distribution and "
+        "clipping; write a complete config whose ranges are centred on them, calibrated on "
+        "small kinematic stores so that their dominant period, zero crossings, adjacent-trace "
+        "correlation and amplitude kurtosis match the sections'. Then: demseis generate OUT.toml "
+        "--out STORE; demseis realism STORE --field SECTION.",
+    )
+    f.add_argument("sections", nargs="+", metavar="SECTION",
+                   help="SEG-Y sections of one survey (or .png / .npy with the sampling given)")
+    f.add_argument("--out", required=True, metavar="SURVEY.toml", help="the config to write")
+    f.add_argument("--dt-ms", type=float, default=None, metavar="MS",
+                   help="sample interval (ms) where the headers do not give it (overrides them)")
+    f.add_argument("--trace-spacing-m", type=float, default=None, metavar="M",
+                   help="trace spacing (m) where the headers do not give it (overrides them)")
+    f.add_argument("--preset", default="field",
+                   help="the preset whose geology and faults the config keeps (default field)")
+    f.add_argument("--rounds", type=nonneg_int, default=3,
+                   help="calibration rounds on small kinematic stores (default 3; 0 = none)")
+    f.set_defaults(func=_fit_command)
+
 
 def _default_prefix(pred_path: str) -> str:
     base = pred_path.rstrip("/\\")
@@ -176,6 +200,17 @@ def _baseline_command(args: argparse.Namespace) -> int:
         overwrite=args.overwrite, progress=sys.stderr.isatty())
     print(f"wrote {args.out}: {done} of {n} samples (others are incomplete shards); "
           "call a fault at probability >= 0.5")
+    return 0
+
+
+def _fit_command(args: argparse.Namespace) -> int:
+    from demseis.survey_fit import fit
+
+    dt = None if args.dt_ms is None else args.dt_ms / 1000.0
+    result = fit(args.sections, args.out, dt_s=dt, trace_spacing_m=args.trace_spacing_m,
+                 preset=args.preset, rounds=args.rounds, progress=False)
+    print(result.table())
+    print(f"wrote {args.out}: demseis generate {args.out} --out STORE.zarr")
     return 0
 
 

@@ -186,6 +186,15 @@ def read_section(path: str | Path) -> NDArray[np.float32]:
     return np.ascontiguousarray(sec, dtype=np.float32)
 
 
+def read_amplitudes(path: str | Path) -> NDArray[np.float32]:
+    """:func:`read_section` as amplitudes: a ``.png`` (a grey display image) less its median
+    luminance, the grey of zero amplitude; other files as they are."""
+    sec = read_section(path)
+    if str(path).lower().endswith(".png"):
+        sec = sec - np.float32(np.median(sec))
+    return sec
+
+
 def resize_sections(stack: NDArray, shape: tuple[int, int]) -> NDArray[np.float32]:
     """Sections (N, H, W) resampled onto an (H2, W2) grid: bilinear, pixel centres aligned.
 

@@ -16,7 +16,7 @@ from demseis.evaluation.realism import (_section, adjacent_trace_correlation, am
                                         fault_instances, faults_per_100_traces, intact_mask,
                                         label_fraction, local_dips, peak_period, throws_m,
                                         trace_correlations, zero_crossing_rates, zero_crossings)
-from demseis.evaluation.segyfile import read_segy_section
+from demseis.evaluation.fieldio import read_amplitudes
 
 FIELD_TARGETS: dict[str, dict] = {
     "dominant_period_samples": {
@@ -261,7 +261,8 @@ def realism_report(store, field=None, *, max_samples: int = 256, seed: int = 0) 
     Parameters
     ----------
     store : path of a demseis store (or a :class:`demseis.Store`).
-    field : path of a SEG-Y section (no labels), or None.
+    field : path of a field section (no labels; SEG-Y, ``.npy``, or a grey ``.png`` display
+        image, read as its luminance less its median), or None.
     max_samples : measure at most this many samples (:func:`choose_samples`).
     seed : the seed of that draw.
 
@@ -297,7 +298,7 @@ def realism_report(store, field=None, *, max_samples: int = 256, seed: int = 0) 
     _StoreView(path)  # a missing or foreign store fails here, in one line
     field_part = None
     if field is not None:  # read before the store's samples: a bad file fails at once
-        sec = read_segy_section(field)
+        sec = read_amplitudes(field)
         field_part = {"path": str(field), "shape": list(sec.shape), **section_measures(sec)}
     report: dict = {"store": store_measures(path, max_samples, seed), "field": field_part,
                     "targets": FIELD_TARGETS, "notes": []}

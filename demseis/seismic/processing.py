@@ -5,8 +5,8 @@ off at its default, drawing nothing from the random generator, so samples made w
 keep their bytes.
 
 Order (:func:`process`): the imaged section with its random noise
-(:func:`demseis.seismic.noise.add_noise`), then coherent linear noise, trace gains (jitter and
-footprint), AGC, clipping and quantisation.
+(:func:`demseis.seismic.noise.add_noise`), then coherent linear noise, gains (trace jitter,
+time jitter, footprint), AGC, clipping and quantisation.
 """
 
 from __future__ import annotations
@@ -32,6 +32,10 @@ class Processing:
         x with a constant time shift per trace; ``inf`` = none.
     linear_noise_slope : that shift (samples per trace; the sign is the dip direction).
     trace_gain_jitter : standard deviation of the natural log of each trace's gain.
+    time_gain_jitter : standard deviation of the natural log of a gain that varies smoothly
+        down the section, the same on every trace (bright and dim intervals: the amplitude
+        contrasts that make a section's amplitudes heavy-tailed): a Gaussian random function
+        of the row with correlation :data:`TIME_GAIN_SAMPLES`.
     footprint_amplitude : relative amplitude of acquisition-footprint stripes, a gain
         ``1 + a cos(2 pi j / P + phi)`` along the traces j (phi drawn).
     footprint_period_traces : their period P (traces).
@@ -45,6 +49,7 @@ class Processing:
     linear_noise_snr_db: float = math.inf
     linear_noise_slope: float = 2.0
     trace_gain_jitter: float = 0.0
+    time_gain_jitter: float = 0.0
     footprint_amplitude: float = 0.0
     footprint_period_traces: float = 10.0
     agc_window_samples: int = 0
@@ -57,6 +62,7 @@ class Processing:
              and self.linear_noise_snr_db != -math.inf, "a number of dB or inf"),
             ("linear_noise_slope", math.isfinite(self.linear_noise_slope), "finite"),
             ("trace_gain_jitter", 0.0 <= self.trace_gain_jitter < math.inf, ">= 0"),
+            ("time_gain_jitter", 0.0 <= self.time_gain_jitter < math.inf, ">= 0"),
             ("footprint_amplitude", 0.0 <= self.footprint_amplitude <= 1.0, "in [0, 1]"),
             ("footprint_period_traces", 1.0 < self.footprint_period_traces < math.inf, "> 1"),
             ("agc_window_samples", self.agc_window_samples >= 0, ">= 0"),
@@ -78,6 +84,20 @@ class Processing:
         """True when nothing is done (every step off)."""
         return self == Processing(linear_noise_slope=self.linear_noise_slope,
                                   footprint_period_traces=self.footprint_period_traces)
+
+
+TIME_GAIN_SAMPLES = 12.0
+"""Standard deviation (rows) of the Gaussian that smooths the time gain's random function."""
+
+
+def smooth_noise(n: int, rng: np.random.Generator, sigma: float = TIME_GAIN_SAMPLES) -> np.ndarray:
+    """A stationary Gaussian random function of ``n`` rows, unit variance: white noise
+    (``n + 8 sigma`` draws) smoothed by a Gaussian of ``sigma`` rows and cut to ``n``."""
+    pad = int(math.ceil(4 * sigma))
+    k = np.arange(-pad, pad + 1)
+    g = np.exp(-0.5 * (k / sigma) ** 2)
+    g /= math.sqrt(float(np.sum(g * g)))
+    return np.convolve(rng.standard_normal(n + 2 * pad), g, mode="valid")
 
 
 def linear_noise(section: np.ndarray, snr_db: float, slope: float,
@@ -145,6 +165,8 @@ def process(section: np.ndarray, proc: Processing, rng: np.random.Generator,
     ntr = out.shape[1]
     if proc.trace_gain_jitter > 0:
         out = out * np.exp(proc.trace_gain_jitter * rng.standard_normal(ntr))[None, :]
+    if proc.time_gain_jitter > 0:
+        out = out * np.exp(proc.time_gain_jitter * smooth_noise(out.shape[0], rng))[:, None]
     if proc.footprint_amplitude > 0:
         phase = rng.uniform(0.0, 2.0 * math.pi)
         stripes = 1.0 + proc.footprint_amplitude * np.cos(

@@ -70,6 +70,15 @@ def test_process_steps_do_what_they_say():
     jittered = process(x, Processing(trace_gain_jitter=0.3), rng)
     gains = np.sqrt(np.sum(jittered ** 2, axis=0) / np.sum(x ** 2, axis=0))
     assert np.std(np.log(gains)) == pytest.approx(0.3, rel=0.15)
+    bright = process(x, Processing(time_gain_jitter=0.5), rng)
+    gain = bright[:, 0] / np.where(x[:, 0] == 0, 1, x[:, 0])
+    np.testing.assert_allclose(bright, x * gain[:, None], rtol=1e-9)    # one gain per row
+    assert np.all(gain > 0)
+    logs = np.log(np.stack([process(np.ones((2000, 1)), Processing(time_gain_jitter=0.5), rng)[:, 0]
+                            for _ in range(20)]))
+    assert np.std(logs) == pytest.approx(0.5, rel=0.05)
+    lag = np.mean(logs[:, 12:] * logs[:, :-12]) / np.mean(logs * logs)
+    assert lag == pytest.approx(math.exp(-12 ** 2 / (4 * 12.0 ** 2)), abs=0.05)  # Gaussian smoothing
     striped = process(x, Processing(footprint_amplitude=0.5, footprint_period_traces=8.0), rng)
     ratio = (striped / np.where(x == 0, 1, x))[10]
     # 1 + 0.5 cos(2 pi j / 8 + phi): eight phases a period, mean square of the cosine 1/2

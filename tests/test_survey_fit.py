@@ -1,0 +1,100 @@
+"""demseis fit: sampling from SEG-Y headers (or asked for), the config written as loadable TOML,
+and a calibrated config whose store measures like the section it was fitted to."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+import tomllib
+
+import numpy as np
+import pytest
+
+import demseis
+from demseis.errors import InputError
+from demseis.generator.config import load_config, parse_config
+from demseis.seismic.segy import write_segy
+from demseis.survey_fit import MEASURES, fit, read_sampling, to_toml
+from tests._helpers import ROOT
+
+
+def _segy(tmp_path, section, dt_s=0.004, spacing=12.5, name="s.sgy"):
+    return write_segy(section, tmp_path / name, x0_m=0.0, cell_m=spacing, top_m=0.0,
+                      domain="time", dt_s=dt_s, trace_spacing_m=spacing)
+
+
+def test_sampling_comes_from_the_headers_or_is_asked_for(tmp_path):
+    sec = np.random.default_rng(0).standard_normal((64, 30)).astype(np.float32)
+    s = read_sampling(_segy(tmp_path, sec, dt_s=0.002, spacing=12.5))
+    assert s.dt_s == pytest.approx(0.002) and s.trace_spacing_m == pytest.approx(12.5)
+    assert s.section.shape == (64, 30) and not s.display_image
+    assert read_sampling(tmp_path / "s.sgy", dt_s=0.004).dt_s == 0.004      # the user overrides
+    np.save(tmp_path / "s.npy", sec)
+    with pytest.raises(InputError, match="sample interval is unknown.*--dt-ms"):
+        read_sampling(tmp_path / "s.npy")
+    with pytest.raises(InputError, match="trace spacing is unknown.*--trace-spacing-m"):
+        read_sampling(tmp_path / "s.npy", dt_s=0.004)
+    with pytest.raises(InputError, match="dt_s must be > 0"):
+        read_sampling(tmp_path / "s.npy", dt_s=-1.0, trace_spacing_m=25.0)
+
+
+def test_the_toml_reads_back_as_the_config():
+    raw = load_config(preset="field").to_dict()
+    raw["sweep"]["snr_db"] = {"dist": "choice", "values": [math.inf, 10.0]}
+    text = to_toml(raw, ["a header"])
+    assert text.startswith("# a header\n")
+    back = tomllib.loads(text)
+    expect = {k: ({kk: vv for kk, vv in v.items() if vv is not None} if isinstance(v, dict) else v)
+              for k, v in raw.items() if v is not None}
+    assert back == expect
+    assert load_config_from_text(text) == parse_config(raw).to_dict()   # the same config
+
+
+def load_config_from_text(text: str) -> dict:
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as tmp:
+        p = Path(tmp) / "c.toml"
+        p.write_text(text)
+        return load_config(p).to_dict()
+
+
+@pytest.mark.slow
+def test_a_fitted_config_measures_like_its_section(tmp_path):
+    """A section of known look (a kinematic store's, 30 Hz Ricker rotated 40 deg, band noise at
+    12 dB, 4 ms, 12.5 m traces) is fitted; the calibrated store measures like it (period, zero
+    crossings and correlation within 15 %, kurtosis within 0.3), the phase is found, and the
+    written config generates."""
+    raw = load_config(preset="field").to_dict()
+    raw["model"]["engine"] = "kinematic"
+    raw["output"].update({"dt_s": 0.004, "trace_spacing_m": 12.5})
+    raw["sweep"].update({"n_runs": 2, "freq_hz": 30.0, "wavelet_phase_deg": 40.0,
+                         "snr_db": 12.0, "noise_kind": "band", "renders_per_snapshot": 1})
+    store = demseis.generate(raw, out=tmp_path / "src.zarr", workers=0, progress=False)
+    sec = np.asarray(store.sample(len(store) - 1)["seismic"])
+    path = _segy(tmp_path, sec, dt_s=0.004, spacing=12.5)
+    result = fit(path, tmp_path / "fit.toml", rounds=2)
+    got = result.rounds[-1]["measures"]
+    for name in MEASURES[:3]:
+        assert got[name] == pytest.approx(result.target[name], rel=0.15), name
+    assert abs(got["excess_kurtosis"] - result.target["excess_kurtosis"]) < 0.3
+    assert result.target["phase_deg"] == pytest.approx(40.0, abs=25.0)
+    cfg = load_config(tmp_path / "fit.toml").to_dict()
+    assert cfg["output"]["dt_s"] == 0.004 and cfg["output"]["trace_spacing_m"] == 12.5
+    assert cfg["sweep"]["freq_hz"]["dist"] == "uniform"
+    assert "| dominant period samples |" in (tmp_path / "fit.toml").read_text()
+
+
+def test_fit_command_asks_for_the_sampling_of_an_image(tmp_path):
+    from PIL import Image
+
+    Image.fromarray((np.random.default_rng(0).random((40, 30)) * 255).astype(np.uint8)).save(
+        tmp_path / "s.png")
+    run = subprocess.run([sys.executable, "-m", "demseis", "fit", str(tmp_path / "s.png"),
+                          "--out", str(tmp_path / "f.toml")], cwd=ROOT, capture_output=True,
+                         text=True, timeout=300)
+    assert run.returncode == 2
+    assert run.stderr.count("\n") == 1 and "--dt-ms" in run.stderr
+    assert not (tmp_path / "f.toml").exists()
