@@ -98,3 +98,20 @@ def test_fit_command_asks_for_the_sampling_of_an_image(tmp_path):
     assert run.returncode == 2
     assert run.stderr.count("\n") == 1 and "--dt-ms" in run.stderr
     assert not (tmp_path / "f.toml").exists()
+
+
+@pytest.mark.slow
+def test_generate_like_a_section_fits_then_generates(tmp_path):
+    rng = np.random.default_rng(1)
+    sec = np.cumsum(rng.standard_normal((120, 60)), axis=0).astype(np.float32)
+    sec -= sec.mean(axis=0)
+    path = _segy(tmp_path, sec, dt_s=0.002, spacing=20.0)
+    out = tmp_path / "like.zarr"
+    run = subprocess.run([sys.executable, "-m", "demseis", "generate", "--like", str(path),
+                          "--preset", "tiny", "--out", str(out), "--workers", "0", "--quiet"],
+                         cwd=ROOT, capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "| dominant period samples |" in run.stdout
+    cfg = demseis.open(out).config
+    assert cfg["output"]["dt_s"] == 0.002 and cfg["output"]["trace_spacing_m"] == 20.0
+    assert cfg["name"] == "fit:s.sgy"

@@ -35,13 +35,21 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
                    help="replace an existing store written with a different config")
     p.add_argument("--dry-run", action="store_true", help="print the plan and exit without computing")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--like", action="append", metavar="SECTION",
+                   help="fit the config to this survey section first (demseis fit; repeatable; "
+                        "on --preset, default field) instead of reading a CONFIG")
+    p.add_argument("--dt-ms", type=float, default=None, metavar="MS",
+                   help="with --like: the sample interval where the headers do not give it")
+    p.add_argument("--trace-spacing-m", type=float, default=None, metavar="M",
+                   help="with --like: the trace spacing where the headers do not give it")
     p.set_defaults(func=cmd_generate)
 
     p = sub.add_parser("render", help="re-render a store's particle snapshots at new frequencies / SNRs")
     p.add_argument("store", metavar="STORE", help="source store (its DEM snapshots are reused)")
     p.add_argument("--freq", required=True, help="comma-separated Ricker frequencies in Hz, e.g. 20,40,60")
     p.add_argument("--snr", default="inf", help="comma-separated SNRs in dB (inf = no noise), default inf")
-    p.add_argument("--noise", default="white", choices=("white", "band"), help="noise kind")
+    p.add_argument("--noise", default="white", choices=("white", "band", "coloured"),
+                   help="noise kind (coloured: power spectrum f^-1)")
     p.add_argument("--imaging", help="comma-separated imaging: 1d, psf (2-D dip-limited PSF), or "
                                      "both; default: the source store's")
     p.add_argument("--psf-max-angle", help="comma-separated maximum illumination angles of the PSF "
@@ -75,7 +83,23 @@ def cmd_generate(args: argparse.Namespace) -> int:
     from demseis.generator.config import load_config
     from demseis.generator.sweep import dry_run_plan, pending_runs
 
-    cfg = load_config(args.config, preset=args.preset)
+    if args.like:
+        if args.config is not None:
+            raise InputError("give a CONFIG or --like SECTION, not both (demseis fit writes the "
+                             "fitted config to a file you can edit)")
+        from demseis.generator.config import parse_config
+        from demseis.survey_fit import fit
+
+        dt = None if args.dt_ms is None else args.dt_ms / 1000.0
+        print(f"fitting the config to {', '.join(args.like)} (demseis fit) ...", file=sys.stderr)
+        fitted = fit(args.like, None, dt_s=dt, trace_spacing_m=args.trace_spacing_m,
+                     preset=args.preset or "field")
+        print(fitted.table())
+        cfg = parse_config(fitted.config)
+    elif args.dt_ms is not None or args.trace_spacing_m is not None:
+        raise InputError("--dt-ms and --trace-spacing-m go with --like SECTION")
+    else:
+        cfg = load_config(args.config, preset=args.preset)
     if args.dry_run:  # what this command would compute into --out now (nothing is written)
         pending, why = pending_runs(cfg, args.out, overwrite=args.overwrite)
         print("\n".join(dry_run_plan(cfg, pending, why)))
