@@ -41,6 +41,7 @@ from demseis.datasets.layout import root_metadata_lost
 from demseis.datasets.lock import pid_alive
 from demseis.errors import ConfigError, InputError, SimulationError, StoreError
 from demseis.generator.config import Config, load_config, parse_config
+from demseis.generator.params import _json_value
 from demseis.generator.engines import get_engine
 from demseis.generator.layout import array_dtypes, grid_of, param_codes, param_dtypes, sample_shape
 from demseis.generator.pipeline import run_shard
@@ -53,7 +54,7 @@ from demseis.generator.workers import (
     start_forkserver,
     worker_start_method,
 )
-from demseis.parameters import SCENARIO, STORED
+from demseis.parameters import PARAMS, SCENARIO, STORED
 
 # dask and distributed (and psutil, which comes with them) are imported inside the functions
 # that start or reach a cluster: ~1 s of imports that a sweep with --workers 0 never needs
@@ -156,12 +157,31 @@ def _first_difference(a: Any, b: Any, path: str = "") -> str | None:
     return None if a == b else path.rstrip(".")
 
 
+def _with_new_defaults(old: Any, new: dict[str, Any]) -> Any:
+    """``old`` (a stored config) with each parameter it lacks and ``new`` holds at its
+    declared default added, so that a store written before a parameter was declared resumes
+    under a config that leaves it at its default (its samples were made that way)."""
+    if not isinstance(old, dict):
+        return old
+    out = {k: dict(v) if isinstance(v, dict) else v for k, v in old.items()}
+    for section, table in new.items():
+        if not isinstance(table, dict) or not isinstance(out.get(section), dict):
+            continue
+        for key, value in table.items():
+            p = PARAMS.get(key)
+            if key not in out[section] and p is not None and p.section == section and \
+                    value == _json_value(p.default):
+                out[section][key] = value
+    return out
+
+
 def _check_same_config(out: Path, attrs: dict[str, Any]) -> None:
     """Refuse the existing store ``out`` unless it was written with the config of ``attrs``
     (:func:`store_attrs`): ConfigError naming the first difference; StoreError (from
     ``read_store_attrs``) for a path that is not a demseis store."""
     old = json.loads(json.dumps(read_store_attrs(out).get("config")))
     new = json.loads(json.dumps(attrs["config"]))
+    old = _with_new_defaults(old, new)
     if old != new:
         diff = _first_difference(old, new) or "config"
         raise ConfigError(

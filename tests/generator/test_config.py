@@ -173,3 +173,17 @@ def test_a_mistyped_key_gets_did_you_mean_not_a_list_of_every_key(raw, message):
         parse_config(raw)
     text = str(err.value)
     assert text.startswith(message) and len(text) < 200, text
+
+
+def test_a_store_written_before_a_parameter_existed_resumes_at_its_default():
+    """A stored config lacking a parameter declared since compares equal when the new config
+    leaves it at its default, and differs when it does not."""
+    from demseis.generator.sweep import _first_difference, _with_new_defaults
+
+    new = load_config(preset="tiny").to_dict()
+    old = {k: dict(v) if isinstance(v, dict) else v for k, v in new.items()}
+    for key in ("wavelet", "linear_noise_snr_db", "quantise_bits"):
+        del old["sweep"][key]
+    assert _with_new_defaults(old, new) == new
+    changed = {**new, "sweep": {**new["sweep"], "quantise_bits": 8}}
+    assert _first_difference(_with_new_defaults(old, changed), changed) == "sweep.quantise_bits"
