@@ -277,6 +277,24 @@ def _secant(x0: float, x1: float, y0: float, y1: float, default: float) -> float
     return slope if slope * default > 0 and 0.05 <= slope / default <= 5.0 else default
 
 
+def _corr_y(measures: dict[str, float]) -> float:
+    """What the SNR moves linearly: the logit of the adjacent-trace correlation."""
+    return _logit(measures["adjacent_trace_correlation"])
+
+
+def _kurt_y(measures: dict[str, float]) -> float:
+    """What the squared time-gain jitter moves linearly: ``ln(kurtosis + 3)``."""
+    return math.log(max(measures["excess_kurtosis"] + 3.0, 0.5))
+
+
+def _step(x: float, y: float, y_want: float, default: float,
+          prev: tuple[float, float] | None) -> float:
+    """The knob ``x`` moved so that ``y`` reaches ``y_want``: by the slope ``default``, or by
+    the secant through the previous round ``prev = (x, y)`` (:func:`_secant`)."""
+    slope = default if prev is None else _secant(prev[0], x, prev[1], y, default)
+    return x + (y_want - y) / slope
+
+
 def calibrate(raw: dict[str, Any], target: dict[str, float], rounds: int, work: Path,
               progress: bool = False) -> list[dict[str, Any]]:
     """Move the frequency, SNR and time-gain jitter of ``raw`` (in place) towards ``target``
@@ -302,25 +320,15 @@ def calibrate(raw: dict[str, Any], target: dict[str, float], rounds: int, work: 
         nyquist = 0.5 / float(raw["output"]["dt_s"])
         sweep["freq_hz"] = float(np.clip(sweep["freq_hz"] * ratio, 1.0, 0.45 * nyquist))
         prev = records[-2] if len(records) > 1 else None
-        # SNR: the logit of the correlation moves 1 per 10/ln10 dB; then the secant of the rounds
-        want, have = _logit(target["adjacent_trace_correlation"]), _logit(
-            got["adjacent_trace_correlation"])
-        slope = math.log(10.0) / 10.0
-        if prev is not None:
-            slope = _secant(prev["knobs"]["snr_db"], sweep["snr_db"],
-                            _logit(prev["measures"]["adjacent_trace_correlation"]), have, slope)
-        sweep["snr_db"] = float(np.clip(sweep["snr_db"] + (want - have) / slope, -10.0, 40.0))
-        # time-gain jitter: ln(kurtosis + 3) moves 4 per unit of s^2; then the secant
-        want = math.log(max(target["excess_kurtosis"] + 3.0, 0.5))
-        have = math.log(max(got["excess_kurtosis"] + 3.0, 0.5))
-        s2 = float(sweep["time_gain_jitter"]) ** 2
-        slope = 4.0
-        if prev is not None:
-            slope = _secant(prev["knobs"]["time_gain_jitter"] ** 2, s2,
-                            math.log(max(prev["measures"]["excess_kurtosis"] + 3.0, 0.5)), have,
-                            slope)
-        sweep["time_gain_jitter"] = float(min(math.sqrt(max(s2 + (want - have) / slope, 0.0)),
-                                              MAX_TIME_GAIN))
+        # SNR: the logit of the correlation moves 1 per 10/ln10 dB; time-gain jitter:
+        # ln(kurtosis + 3) moves 4 per unit of s^2; then the secant of the rounds
+        snr = _step(sweep["snr_db"], _corr_y(got), _corr_y(target), math.log(10.0) / 10.0,
+                    None if prev is None else (prev["knobs"]["snr_db"], _corr_y(prev["measures"])))
+        sweep["snr_db"] = float(np.clip(snr, -10.0, 40.0))
+        s2 = _step(float(sweep["time_gain_jitter"]) ** 2, _kurt_y(got), _kurt_y(target), 4.0,
+                   None if prev is None else (prev["knobs"]["time_gain_jitter"] ** 2,
+                                              _kurt_y(prev["measures"])))
+        sweep["time_gain_jitter"] = float(min(math.sqrt(max(s2, 0.0)), MAX_TIME_GAIN))
     return records
 
 

@@ -30,6 +30,7 @@ import numpy as np
 from scipy import ndimage
 
 from demseis.errors import InputError
+from demseis.seismic.wavelet import kurtosis
 
 WINDOW = 32
 """Samples per correlation window (half-overlapping)."""
@@ -319,11 +320,7 @@ def excess_kurtosis(section: np.ndarray) -> float:
     than 4 amplitudes."""
     a = np.asarray(section, dtype=np.float64).ravel()
     a = a[np.isfinite(a) & (a != 0.0)]
-    if a.size < 4:
-        return float("nan")
-    d = a - a.mean()
-    m2 = float(np.mean(d * d))
-    return float(np.mean(d ** 4) / m2 ** 2 - 3.0) if m2 > 0 else float("nan")
+    return kurtosis(a) if a.size >= 4 else float("nan")
 
 
 def fault_instances(fault: np.ndarray, fault_id: np.ndarray | None = None) -> np.ndarray:

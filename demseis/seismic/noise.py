@@ -71,16 +71,16 @@ def add_noise(section: np.ndarray, snr_db: float, kind: str,
         return x.astype(out_dtype, copy=True)
     xs = x.astype(np.float64)[..., None] if x.ndim == 1 else x.astype(np.float64)
     noise = rng.standard_normal(xs.shape)
-    if kind == "band":
-        spec = np.fft.rfft(xs, axis=-2)
-        shape = np.sqrt(np.mean(np.abs(spec) ** 2, axis=-1, keepdims=True))
-        noise = np.fft.irfft(np.fft.rfft(noise, axis=-2) * shape, n=xs.shape[-2], axis=-2)
-    elif kind == "coloured":
+    if kind != "white":    # white noise filtered along depth/time by an amplitude shape
         n = xs.shape[-2]
-        f = np.fft.rfftfreq(n)
-        shape = np.zeros(f.size)
-        shape[1:] = f[1:] ** (-slope / 2.0)
-        noise = np.fft.irfft(np.fft.rfft(noise, axis=-2) * shape[:, None], n=n, axis=-2)
+        if kind == "band":
+            spec = np.fft.rfft(xs, axis=-2)
+            shape = np.sqrt(np.mean(np.abs(spec) ** 2, axis=-1, keepdims=True))
+        else:
+            f = np.fft.rfftfreq(n)
+            shape = np.zeros((f.size, 1))
+            shape[1:, 0] = f[1:] ** (-slope / 2.0)
+        noise = np.fft.irfft(np.fft.rfft(noise, axis=-2) * shape, n=n, axis=-2)
     s_rms = rms(xs, axis=(-2, -1))
     n_rms = rms(noise, axis=(-2, -1))
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -268,8 +268,7 @@ class Wavelet:
         else:
             spec = amp.astype(np.complex128)
         if self.phase_deg % 360.0 != 0.0:
-            rot = np.exp(1j * math.radians(self.phase_deg))
-            spec = spec * np.where(f > 0, rot, rot.real)
+            spec = spec * rotation_factors(f.size, n_fft, self.phase_deg)
         w = np.roll(irfft(spec, n_fft) * scale, n_fft // 2)[n_fft // 2 - half_n:
                                                             n_fft // 2 + half_n + 1]
         t = np.abs(np.arange(-half_n, half_n + 1)) / half_n
@@ -309,6 +308,18 @@ def as_wavelets(wavelets) -> list[Wavelet]:
     return out
 
 
+def rotation_factors(n_bins: int, n: int, phase_deg: float) -> np.ndarray:
+    """The factors by which a constant-phase rotation multiplies the ``n_bins`` terms of the
+    real FFT of ``n`` samples: ``exp(i phi)``, and ``cos(phi)`` at zero frequency and (``n``
+    even) at the Nyquist frequency, which have no quadrature."""
+    rot = np.exp(1j * math.radians(float(phase_deg)))
+    mult = np.full(n_bins, rot)
+    mult[0] = rot.real
+    if n % 2 == 0:
+        mult[-1] = rot.real
+    return mult
+
+
 def rotate_phase(x: np.ndarray, phase_deg: float, axis: int = -1) -> np.ndarray:
     """Constant-phase rotation of traces along ``axis``: ``x cos(phi) - H[x] sin(phi)``, the
     Hilbert transform ``H`` taken by FFT over the trace (circular; pad a short trace).
@@ -319,22 +330,19 @@ def rotate_phase(x: np.ndarray, phase_deg: float, axis: int = -1) -> np.ndarray:
     a = np.asarray(x, dtype=np.float64)
     n = a.shape[axis]
     spec = rfft(a, axis=axis)
-    rot = np.exp(1j * math.radians(float(phase_deg)))
-    mult = np.full(spec.shape[axis], rot)
-    mult[0] = rot.real
-    if n % 2 == 0:
-        mult[-1] = rot.real                      # the Nyquist term has no quadrature
+    mult = rotation_factors(spec.shape[axis], n, phase_deg)
     shape = [1] * a.ndim
     shape[axis] = -1
     return irfft(spec * mult.reshape(shape), n=n, axis=axis)
 
 
 def kurtosis(x: np.ndarray) -> float:
-    """Excess kurtosis ``E[(x - m)^4] / var^2 - 3`` of all values of ``x``."""
-    a = np.asarray(x, dtype=np.float64).ravel()
-    a = a - a.mean()
-    var = float(np.mean(a * a))
-    return float(np.mean(a ** 4) / (var * var) - 3.0) if var > 0 else 0.0
+    """Excess kurtosis ``m4 / m2**2 - 3`` of all values of ``x`` (central moments): 0 for
+    Gaussian values, -1.5 for a sinusoid, > 0 for spiky ones; NaN when they are all equal."""
+    d = np.asarray(x, dtype=np.float64).ravel()
+    d = d - d.mean()
+    m2 = float(np.mean(d * d))
+    return float(np.mean(d ** 4) / m2 ** 2 - 3.0) if m2 > 0 else float("nan")
 
 
 @dataclass(frozen=True)

@@ -161,6 +161,8 @@ def test_kurtosis_of_known_distributions():
     rng = np.random.default_rng(1)
     assert kurtosis(rng.standard_normal(200_000)) == pytest.approx(0.0, abs=0.05)
     assert kurtosis(rng.laplace(size=200_000)) == pytest.approx(3.0, abs=0.15)
+    assert kurtosis(np.sin(np.linspace(0, 200 * np.pi, 100_000))) == pytest.approx(-1.5, abs=1e-3)
+    assert np.isnan(kurtosis(np.ones(10)))
 
 
 def test_bad_wavelets_are_named():
