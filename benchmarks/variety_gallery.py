@@ -33,15 +33,17 @@ def main(argv=None) -> int:
     import matplotlib.pyplot as plt
     import zarr
 
+    from demseis.datasets import read_params
     from demseis.generator.layout import param_codes
     from demseis.parameters import MAX_BASEMENT_FAULTS
 
     codes = param_codes()
 
     root = zarr.open_group(args.store, mode="r")
-    p = {k: root["params"][k][:] for k in ("run_id", "snapshot", "freq_hz", "structure",
-                                           "n_basement_faults")}
-    kinds = [root["params"][f"fault{k}_kind"][:] for k in range(MAX_BASEMENT_FAULTS)]
+    params = read_params(args.store)
+    p = {k: params[k] for k in ("run_id", "snapshot", "freq_hz", "structure",
+                                "n_basement_faults")}
+    kinds = [params[f"fault{k}_kind"] for k in range(MAX_BASEMENT_FAULTS)]
     picked = []
     for run in range(args.n):
         sel = np.flatnonzero((p["run_id"] == run) & (p["freq_hz"] == 40.0))

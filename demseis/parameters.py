@@ -458,7 +458,7 @@ PROPERTY_FIELDS: tuple[str, ...] = ("gardner_a", "gardner_b", "vp_scatter", "rho
 
 @dataclass(frozen=True)
 class Stored:
-    """A per-sample value a store holds that is derived, not drawn (``params/<name>``)."""
+    """A per-sample value a store holds that is derived, not drawn (a column of its ``params`` table)."""
 
     name: str
     dtype: str
@@ -467,7 +467,7 @@ class Stored:
     doc: str
 
 
-#: derived per-sample values in a store's ``params/`` (besides the run and sample parameters)
+#: derived per-sample values in a store's ``params`` table (besides the run and sample parameters)
 STORED: tuple[Stored, ...] = (
     Stored("run_id", "int32", "run", "", "DEM run index (the store shard)"),
     Stored("sample_in_run", "int32", "sample", "", "sample index within its run"),
@@ -541,7 +541,7 @@ def markdown_table() -> str:
     for row in table_rows():
         lines.append("| " + " | ".join(f"`{row[0]}`" if i == 0 else c.replace("|", "\\|")
                                         for i, c in enumerate(row)) + " |")
-    lines += ["", "Stored per sample in `params/` besides the run and sample parameters above:", "",
+    lines += ["", "Stored per sample in the store's `params` table besides the run and sample parameters above:", "",
               "| name | dtype | level | unit | description |", "| --- | --- | --- | --- | --- |"]
     for s in STORED:
         lines.append(f"| `{s.name}` | {s.dtype} | {s.level} | {s.unit} | {s.doc} |")

@@ -25,16 +25,16 @@ from _field import ATTRIBUTION, FIELD, ROOT  # noqa: E402  (scripts/_field.py)
 
 from demseis.evaluation.segyfile import read_segy_section  # noqa: E402
 
-from demseis.datasets import open_store, read_sample  # noqa: E402
+from demseis.datasets import read_params, read_sample  # noqa: E402
 
 
 
 
 def pick(store: Path, sample: int, freq: float) -> tuple[np.ndarray, np.ndarray, int]:
     """The first sample at or after ``sample`` rendered at ``freq`` Hz, with its fault label."""
-    root = open_store(store)
-    freqs = np.asarray(root["params"]["freq_hz"][:])
-    snaps = np.asarray(root["params"]["snapshot"][:])
+    params = read_params(store)
+    freqs = np.asarray(params["freq_hz"])
+    snaps = np.asarray(params["snapshot"])
     order = [i for i in range(freqs.size) if i >= sample and abs(freqs[i] - freq) < 1e-6
              and snaps[i] == snaps.max()]
     i = order[0] if order else sample

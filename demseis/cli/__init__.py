@@ -31,7 +31,7 @@ from demseis.errors import DemseisError
 
 
 #: commands that write a store: an interrupted one resumes when run again
-WRITING_COMMANDS = frozenset({"generate", "render", "relabel"})
+WRITING_COMMANDS = frozenset({"generate", "render", "relabel", "migrate"})
 
 
 class _Parser(argparse.ArgumentParser):
@@ -141,7 +141,14 @@ def _main(argv: Sequence[str] | None) -> int:
         where = exc.filename if exc.filename is not None else _path_arg(locals().get("args"))
         print(f"demseis: error: {where}: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt as exc:
+    except (KeyboardInterrupt, RuntimeError) as exc:
+        # Python 3.11 wraps a Ctrl-C that lands while a class is being created (an import of
+        # dask's expression classes at a sweep's start) as "RuntimeError: Error calling
+        # __set_name__", the KeyboardInterrupt as its cause
+        if isinstance(exc, RuntimeError):
+            if not isinstance(exc.__cause__, KeyboardInterrupt):
+                raise
+            exc = exc.__cause__
         interrupts.clear()
         # an interrupted zarr call leaves a task on zarr's event loop. What was written is
         # consistent (a shard counts only once its done flag is set), so that is noise.

@@ -1,4 +1,4 @@
-"""``demseis info``, ``demseis validate`` and ``demseis export-segy``: look at a store.
+"""``demseis info``, ``validate``, ``export-segy`` and ``migrate``: look at a store, convert one.
 
 - ``demseis validate PATH``: exit 0 and a one-line summary when every done shard is fine;
   exit 1 and one line per problem otherwise; exit 2 for a missing or foreign store.
@@ -14,7 +14,7 @@ import sys
 
 
 def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``info``, ``validate`` and ``export-segy``."""
+    """Add ``info``, ``validate``, ``export-segy`` and ``migrate``."""
     p = sub.add_parser("info", help="summarise a store: samples, shapes, parameter ranges, config")
     p.add_argument("path", metavar="STORE", help="store path")
     p.set_defaults(func=cmd_info)
@@ -44,6 +44,18 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
     p.add_argument("--overwrite", action="store_true", help="replace FILE.sgy if it exists")
     p.set_defaults(func=cmd_export_segy)
 
+    p = sub.add_parser(
+        "migrate",
+        help="convert a store written by an older demseis to this one's layout (in place)",
+        description="Convert a store of schema version 2 to this demseis's version in place: "
+        "its per-sample parameters move into one table (one file per run instead of one per "
+        "parameter and run) with an index; the samples, done flags and particles keep their "
+        "bytes and nothing is recomputed. Interrupted, run it again. On a current store it "
+        "rebuilds the parameter index.",
+    )
+    p.add_argument("path", metavar="STORE", help="store directory")
+    p.set_defaults(func=cmd_migrate)
+
 
 def cmd_info(args: argparse.Namespace) -> int:
     from demseis.api import open as open_store
@@ -69,4 +81,11 @@ def cmd_export_segy(args: argparse.Namespace) -> int:
 
     out = export_segy(args.store, args.sample, args.out, overwrite=args.overwrite)
     print(f"wrote {out}", file=sys.stderr)
+    return 0
+
+
+def cmd_migrate(args: argparse.Namespace) -> int:
+    from demseis.datasets.migrate import migrate_store
+
+    print(migrate_store(args.path, progress=sys.stderr.isatty()).summary())
     return 0

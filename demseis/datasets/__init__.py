@@ -4,11 +4,13 @@ Writing (driver: :func:`create_store`, :func:`record_failures`, :func:`finalize_
 per shard: :func:`write_shard`), resuming (:func:`shard_status`, :func:`stored_config`), reading
 (:func:`open_store`, :func:`read_store_attrs`, :func:`read_particles`, :func:`read_sample`,
 :class:`FaultSegDataset`, :class:`ShardAwareSampler`, :func:`to_xarray`), checking
-(:func:`validate_store`, :func:`damaged_shards`) and the writer lock (:func:`writer_lock`).
+(:func:`validate_store`, :func:`damaged_shards`), converting an older store
+(:func:`migrate_store`) and the writer lock (:func:`writer_lock`).
 The sample arrays a store may hold are declared in :mod:`demseis.schema`. Modules: ``layout``
 (version, shape, metadata checks, opening), ``create``, ``write`` (one shard), ``particles``,
-``status`` (done flags, failures, finalisation), ``integrity`` (checksums), ``validate``,
-``dataset``, ``read``, ``xarray_io`` and ``lock``. The on-disk layout is documented in
+``status`` (done flags, failures, finalisation), ``records`` (the parameter table), ``index``
+(its index), ``table`` (the done samples' parameters), ``integrity`` (checksums),
+``validate``, ``migrate``, ``dataset``, ``read``, ``xarray_io`` and ``lock``. The on-disk layout is documented in
 ``docs/store.md``. Importing this package imports neither torch, xarray nor zarr.
 """
 
@@ -31,7 +33,9 @@ from demseis.datasets.layout import (
     store_layout,
     stored_config,
 )
+from demseis.datasets.migrate import MigrateReport, migrate_store
 from demseis.datasets.particles import read_particles, write_particles
+from demseis.datasets.read import read_params
 from demseis.datasets.status import (
     finalize_store,
     record_failures,
@@ -48,6 +52,7 @@ __all__ = [
     "DoneParams",
     "FaultSegDataset",
     "FullParams",
+    "MigrateReport",
     "ParamSpec",
     "Sample",
     "ShardAwareSampler",
@@ -57,8 +62,10 @@ __all__ = [
     "create_store",
     "damaged_shards",
     "finalize_store",
+    "migrate_store",
     "open_store",
     "read_layout",
+    "read_params",
     "read_done_params",
     "read_particles",
     "read_sample",

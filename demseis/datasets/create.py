@@ -26,15 +26,16 @@ from demseis.datasets._nodes import (
     small_compressors,
     zarr_files,
 )
+from demseis.datasets.index import index_block
 from demseis.datasets.layout import (
     SCHEMA_VERSION,
     StoreLayout,
-    fill_value_for,
     is_demseis_store,
     open_store,
     root_metadata_lost,
     store_layout,
 )
+from demseis.datasets.records import ParamColumn, fill_value_for, record_dtype, table_attributes
 from demseis.errors import InputError, StoreError
 from demseis.schema import SAMPLE_ARRAYS, sample_array, stored_arrays
 
@@ -188,7 +189,9 @@ def create_store(
     equals the requested one; otherwise :class:`StoreError` names the difference. Damaged
     metadata is rewritten first (:func:`repair_metadata`): an array's or group's ``zarr.json``
     that is missing or does not parse, and a lost root ``zarr.json`` of a store whose
-    ``shard_done`` array is intact (then the root is written from ``attrs``).
+    ``shard_done`` array is intact (then the root is written from ``attrs``). A store that
+    lacks some of ``params`` (written before they were declared) gets the new parameter table
+    and its done shards become pending (:func:`_extend_table`): a resume recomputes them.
 
     Raises
     ------
@@ -229,6 +232,10 @@ def create_store(
                 repair_metadata(path, files)
                 group = open_store(path, "r+")  # schema version check
                 have = store_layout(group)
+                if _adds_parameters(have, wanted):
+                    _extend_table(path, files)
+                    group = open_store(path, "r+")
+                    have = store_layout(group)
                 diffs = have.describe_difference(wanted)
                 if diffs:
                     raise StoreError(
@@ -244,6 +251,30 @@ def create_store(
             )
     put_files(path, files)
     return open_store(path, "r+")
+
+
+def _adds_parameters(have: StoreLayout, wanted: StoreLayout) -> bool:
+    """True when ``wanted`` differs from the store's layout ``have`` only by parameters the
+    store lacks (a store written before they were declared)."""
+    return (have.table and set(have.params) < set(wanted.params)
+            and all(wanted.params[k] == v for k, v in have.params.items())
+            and not replace(have, params={}).describe_difference(replace(wanted, params={})))
+
+
+def _extend_table(path: Path, files: Mapping[str, bytes]) -> None:
+    """Declare the parameter table of ``files`` (more columns) in the store at ``path``. Its
+    records lack the new columns, so every done shard becomes pending (its done flag first,
+    then its table chunk and the index go): resuming computes the runs again, with the bytes
+    they had (the new parameters at their defaults made them so). Interrupted, the next resume
+    finds the same difference and finishes."""
+    for sub in ("shard_done/c", "params", "params_index", "params_index_files"):
+        base = path.joinpath(*sub.split("/"))
+        for f in base.iterdir() if base.is_dir() else ():
+            if f.name != "zarr.json" and f.is_file():
+                f.unlink()
+    put_files(path, {k: v for k, v in files.items()
+                     if k.split("/")[0] in ("params", "params_index", "params_index_files")
+                     and k.endswith("zarr.json")})
 
 
 def repair_metadata(path: Path, files: Mapping[str, bytes]) -> list[str]:
@@ -293,16 +324,8 @@ def _store_files(wanted: StoreLayout, param_specs: Mapping[str, ParamSpec],
             dimension_names=("sample", row_dim, "x"),
             attributes=spec.store_attributes(),
         )
-    for name, spec in param_specs.items():
-        specs[f"params/{name}"] = dict(
-            shape=(n,),
-            dtype=spec.dtype,
-            chunks=(s,),  # one chunk per shard: each shard task owns exactly one chunk file
-            fill_value=fill_value_for(spec.dtype),
-            compressors=small_compressors(),
-            dimension_names=("sample",),
-            attributes=_param_attrs(name, spec),
-        )
+    if param_specs:
+        specs.update(_table_specs(wanted, param_columns_of(param_specs)))
     specs["shard_done"] = dict(
         shape=(wanted.n_shards,),
         dtype="uint8",
@@ -322,7 +345,6 @@ def _store_files(wanted: StoreLayout, param_specs: Mapping[str, ParamSpec],
                                fill_value=float("nan"), compressors=small_compressors(),
                                dimension_names=(name,),
                                attributes={"units": units, "long_name": long_name})[...] = values
-        group.create_group("params")
         create_arrays(store, specs)
         group.create_group("particles")
 
@@ -351,6 +373,41 @@ def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.n
     if (rows.shape[0], x.shape[0]) != shape:
         return row_dim, {}
     return row_dim, {row_dim: rows, "x": x}
+
+
+#: the table's and the index's chunk files are ``c.<k>.0`` beside their ``zarr.json``: one
+#: file per shard (or block) and no directory per shard
+_FLAT_KEYS = {"name": "default", "separator": "."}
+
+
+def param_columns_of(param_specs: Mapping[str, ParamSpec]) -> list[ParamColumn]:
+    """The columns of the parameter table of ``param_specs`` (name order)."""
+    return [ParamColumn(name, np.dtype(spec.dtype), spec.categories, _param_attrs(name, spec))
+            for name, spec in sorted(param_specs.items())]
+
+
+def _table_specs(wanted: StoreLayout, columns: list[ParamColumn]) -> dict[str, dict[str, Any]]:
+    """The parameter table (``params``, one chunk of records per shard) and its index
+    (:mod:`demseis.datasets.index`): create_array keywords by path."""
+    n, s, n_shards = wanted.n_samples, wanted.samples_per_shard, wanted.n_shards
+    width = record_dtype(columns).itemsize
+    block = index_block(n_shards)
+    common = dict(dtype="uint8", fill_value=0, compressors=small_compressors(),
+                  chunk_key_encoding=_FLAT_KEYS)
+    return {
+        "params": dict(shape=(n, width), chunks=(s, width), dimension_names=("sample", "byte"),
+                       attributes=table_attributes(columns), **common),
+        "params_index": dict(
+            shape=(n, width), chunks=(s * block, width), dimension_names=("sample", "byte"),
+            attributes={"units": "1", "long_name": f"the records of params, {block} shards per "
+                        "chunk (an index: see params_index_files)"}, **common),
+        "params_index_files": dict(
+            shape=(n_shards, 2), dtype="int64", chunks=(block, 2), fill_value=0,
+            compressors=small_compressors(), chunk_key_encoding=_FLAT_KEYS,
+            dimension_names=("shard", "identity"),
+            attributes={"units": "1", "long_name": "size and crc32c of the params chunk each "
+                        "shard's index rows were copied from; 0: not indexed"}),
+    }
 
 
 def _param_attrs(name: str, spec: ParamSpec) -> dict[str, Any]:

@@ -32,6 +32,7 @@ import numpy as np
 
 from demseis import __version__
 from demseis.datasets._shardio import ArrayMeta, array_meta
+from demseis.datasets.records import ParamColumn, columns_from_attributes
 from demseis.errors import InputError, StoreError
 from demseis.schema import SAMPLE_ARRAYS, SampleArray, spec_from_attributes
 
@@ -39,33 +40,26 @@ from demseis.schema import SAMPLE_ARRAYS, SampleArray, spec_from_attributes
 # ``import demseis.datasets`` nor a shard write (write_shard, which reads the metadata files
 # itself) needs it.
 
-SCHEMA_VERSION = 2
-"""Version of the on-disk layout. Readers refuse stores of any other version.
+SCHEMA_VERSION = 3
+"""Version of the on-disk layout. Readers refuse stores of any other version
+(``demseis migrate`` converts a version-2 store).
 
 1: the first layout. 2: a crc32c checksum on every chunk, coordinate arrays (``depth`` or
 ``twt``, and ``x``), ``units`` and ``long_name`` on every array, categorical parameters with
-their category names, dimension names on the particle arrays.
+their category names, dimension names on the particle arrays. 3: every per-sample parameter in
+one table of records (``params``, one file per shard: :mod:`demseis.datasets.records`) and its
+index (``params_index``, ``params_index_files``: :mod:`demseis.datasets.index`), instead of an
+array per parameter (``params/<name>``, one file per parameter and shard).
 """
 
+MIGRATABLE_VERSIONS = (2,)
+"""Schema versions ``demseis migrate`` converts to :data:`SCHEMA_VERSION`."""
 
-#: root arrays that are not sample arrays: the done flags and the coordinates of the axes
-NOT_SAMPLE_ARRAYS = ("shard_done", "depth", "twt", "x")
 
-
-def fill_value_for(dtype: np.dtype) -> Any:
-    """The fill value marking never-written data for ``dtype``.
-
-    NaN for floats, the maximum for unsigned integers (255 for uint8: outside every label range)
-    and the minimum for signed integers (-32768 for int16).
-    """
-    dtype = np.dtype(dtype)
-    if dtype.kind == "f":
-        return float("nan")
-    if dtype.kind == "u":
-        return int(np.iinfo(dtype).max)
-    if dtype.kind == "i":
-        return int(np.iinfo(dtype).min)
-    raise InputError(f"dtype {dtype} is not supported in a demseis store (use int, uint or float)")
+#: root arrays that are not sample arrays: the done flags, the coordinates of the axes, the
+#: parameter table and its index
+NOT_SAMPLE_ARRAYS = ("shard_done", "depth", "twt", "x", "params", "params_index",
+                     "params_index_files")
 
 
 def _root_metadata(path: Path) -> dict | None:
@@ -123,7 +117,10 @@ def check_store_metadata(path: Path) -> dict:
     version = info["schema_version"]
     if version != SCHEMA_VERSION:
         hint = ""
-        if isinstance(version, int) and version < SCHEMA_VERSION:
+        if version in MIGRATABLE_VERSIONS:
+            hint = (f"; convert it with `demseis migrate {path}` (its samples keep their bytes, "
+                    "nothing is recomputed)")
+        elif isinstance(version, int) and version < SCHEMA_VERSION:
             # refused, not read: an old store has no chunk checksums, so none of the integrity
             # guarantees of this version would hold for it
             hint = ("; it was written by an older demseis: regenerate it with `demseis generate` "
@@ -148,6 +145,11 @@ class StoreLayout:
     params : parameter name -> dtype, sorted by name.
     specs : sample array name -> its declaration as the store describes it (role, units,
         fill, valid range: :func:`sample_specs`); not compared by :meth:`describe_difference`.
+    columns : parameter name -> its :class:`~demseis.datasets.records.ParamColumn` (dtype,
+        categories, units), in the order of the table's records; not compared.
+    table : True when the parameters are one table of records (``params``, as
+        :func:`~demseis.datasets.create.create_store` makes them), False for one array per
+        parameter (``params/<name>``, a store assembled by hand with zarr).
     """
 
     n_shards: int
@@ -156,6 +158,8 @@ class StoreLayout:
     arrays: dict[str, np.dtype] = field(default_factory=dict)
     params: dict[str, np.dtype] = field(default_factory=dict)
     specs: dict[str, SampleArray] = field(default_factory=dict, compare=False, repr=False)
+    columns: dict[str, ParamColumn] = field(default_factory=dict, compare=False, repr=False)
+    table: bool = field(default=True, compare=False)
 
     @property
     def n_samples(self) -> int:
@@ -345,11 +349,29 @@ def layout_of(members: Mapping[str, Any]) -> StoreLayout:
             )
     if not arrays:
         raise StoreError("store has no sample arrays (seismic, fault, ...)")
-    params: dict[str, np.dtype] = {}
+    columns = param_columns(members)
+    params = {name: np.dtype(c.dtype) for name, c in columns.items()}
+    return StoreLayout(n_shards, int(samples_per_shard), shape, arrays, params, specs, columns,
+                       "params" in members)
+
+
+def param_columns(members: Mapping[str, Any]) -> dict[str, ParamColumn]:
+    """The per-sample parameters of a store, name -> column: the columns of its ``params``
+    table in record order (name order, as :func:`~demseis.datasets.create.create_store`
+    writes them), or (a store assembled by hand with zarr) its ``params/<name>`` arrays by
+    name."""
+    table = members.get("params")
+    if table is not None:
+        return columns_from_attributes(_attributes(table), "array 'params'")
+    out = {}
     for name in sorted(members):
         if name.startswith("params/"):
-            params[name[len("params/"):]] = np.dtype(members[name].dtype)
-    return StoreLayout(n_shards, int(samples_per_shard), shape, arrays, params, specs)
+            attrs = _attributes(members[name])
+            cats = attrs.get("categories")
+            out[name[len("params/"):]] = ParamColumn(
+                name[len("params/"):], np.dtype(members[name].dtype),
+                None if cats is None else tuple(str(c) for c in cats), attrs)
+    return out
 
 
 # --------------------------------------------------------------------------------------------

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from demseis.datasets._shardio import PARTIAL_SUFFIX
+from demseis.datasets.index import update_index
 from demseis.datasets.integrity import damaged_shards, read_done_flags
 from demseis.datasets.layout import open_store
 from demseis.errors import InputError
@@ -92,8 +93,9 @@ def remove_partial_writes(path: str | Path) -> list[Path]:
 
 
 def finalize_store(path: str | Path) -> None:
-    """Remove killed writers' temporary files and write consolidated metadata (once, at the end
-    of a sweep, when no shard task runs any more). Driver only.
+    """Remove killed writers' temporary files, bring the index of the parameter table up to
+    date (:func:`~demseis.datasets.index.update_index`) and write consolidated metadata (once,
+    at the end of a sweep, when no shard task runs any more). Driver only.
 
     Any later metadata write (resume, :func:`record_failures`) drops the consolidated copy;
     calling this again restores it.
@@ -102,6 +104,7 @@ def finalize_store(path: str | Path) -> None:
 
     open_store(path, "r+")
     remove_partial_writes(path)  # of a killed dask worker, or of a killed earlier driver
+    update_index(path)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
         zarr.consolidate_metadata(str(Path(path)))

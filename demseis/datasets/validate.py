@@ -9,6 +9,7 @@ so it takes no writer lock and may run while a sweep writes (it checks the shard
 
 from __future__ import annotations
 
+import os
 import sys
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
@@ -19,15 +20,19 @@ import numpy as np
 
 from tqdm import tqdm
 
+from demseis.datasets.index import INDEX_ARRAYS, indexed_rows
+from demseis.datasets._shardio import check_chunk_file
 from demseis.datasets.integrity import read_done_flags, shard_damage
 from demseis.datasets.layout import (
     SCHEMA_VERSION,
+    StoreLayout,
+    array_metas,
     check_store_metadata,
-    fill_value_for,
     metadata_problems,
     open_store,
     store_layout,
 )
+from demseis.datasets.records import fill_value_for, read_table_chunk, unpack
 from demseis.datasets.particles import particle_group_name, read_particles
 from demseis.errors import StoreError
 from demseis.schema import SampleArray
@@ -127,6 +132,50 @@ def _intact(group: Any, names: Iterable[str], label: str, k: int, sel: slice,
         yield name, values
 
 
+def _shard_params(path: Path, group: Any, layout: StoreLayout, metas: dict, k: int,
+                  damage: list[str], problems: list[str],
+                  records: dict[int, np.ndarray]) -> dict[str, np.ndarray]:
+    """Every parameter of shard ``k`` whose checksum passed, name -> (S,) values; the shard's
+    records are kept in ``records`` (for the index check)."""
+    if not layout.table:  # a store assembled by hand: an array per parameter
+        pgroup = group["params"] if layout.params else None
+        sel = layout.shard_slice(k)
+        return dict(_intact(pgroup, layout.params, "parameter ", k, sel, damage, problems))
+    if not layout.params or any(line.startswith(f"shard {k}: parameters ") for line in damage):
+        return {}
+    try:
+        rows = read_table_chunk(path, metas["params"], k, layout.samples_per_shard)[0]
+        values = unpack(rows, list(layout.columns.values()))
+    except (OSError, ValueError) as exc:
+        problems.append(f"shard {k}: parameters are unreadable: {exc}")
+        return {}
+    records[k] = rows
+    return values
+
+
+def _index_problems(path: Path, layout: StoreLayout, metas: dict,
+                    records: dict[int, np.ndarray]) -> list[str]:
+    """The index of the parameter table against the table: a block that fails its checksum,
+    or rows that differ from the chunk they claim to copy (``demseis migrate`` rebuilds it)."""
+    if not layout.table or not all(n in metas for n in INDEX_ARRAYS):
+        return []
+    out = []
+    base = path / "params_index_files"
+    for name in sorted(n for n in (os.listdir(base) if base.is_dir() else ()) if n.startswith("c.")):
+        for arr in INDEX_ARRAYS:
+            problem = check_chunk_file(path / arr / name)
+            if problem:
+                out.append(f"index block {name.split('.')[1]}: {arr} is damaged ({problem}); "
+                           f"`demseis migrate {path}` rebuilds the index")
+    shards = np.array(sorted(records), dtype=np.int64)
+    held = indexed_rows(path, metas, shards, layout.samples_per_shard)
+    wrong = [k for k, rows in held.items() if not np.array_equal(rows, records[k])]
+    if wrong:
+        out.append(f"the index holds other parameters than the table for shards {_fmt(wrong)}; "
+                   f"`demseis migrate {path}` rebuilds the index")
+    return out
+
+
 def validate_store(path: str | Path, *, check_particles: bool = True,
                    progress: bool = False) -> ValidationReport:
     """Check a demseis store; return every problem found.
@@ -205,7 +254,8 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
             problems.append(f"shard {key} is done but still listed under 'failures'")
 
     s = layout.samples_per_shard
-    pgroup = group["params"] if layout.params else None
+    metas = array_metas(Path(path)) if layout.table else {}
+    records: dict[int, np.ndarray] = {}
     run_of_shard: dict[int, int] = {}
     for k in tqdm(done_shards.tolist(), desc="validate", unit="shard", disable=not progress,
                   file=sys.stderr):
@@ -214,10 +264,9 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
         problems.extend(damage)
         for name, values in _intact(group, layout.arrays, "", k, sel, damage, problems):
             problems.extend(_check_array(layout.specs[name], values, k, sel.start))
-        pvals: dict[str, np.ndarray] = {}
-        for name, v in _intact(pgroup, layout.params, "parameter ", k, sel, damage, problems):
+        pvals = _shard_params(Path(path), group, layout, metas, k, damage, problems, records)
+        for name, v in pvals.items():
             dtype = layout.params[name]
-            pvals[name] = v
             if dtype.kind == "f":
                 if np.isnan(v).any():
                     problems.append(f"shard {k}: parameter {name} has NaN (missing) values")
@@ -249,6 +298,7 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
                     )
         report.n_samples_checked += s
 
+    problems.extend(_index_problems(Path(path), layout, metas, records))
     seen: dict[int, int] = {}
     for k, rid in run_of_shard.items():
         if rid in seen:

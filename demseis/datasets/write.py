@@ -1,7 +1,7 @@
 """Writing one shard of a demseis store: :func:`write_shard`, one task per shard.
 
-A task touches only the files of its own shard (one shard file per sample array, one chunk per
-parameter array, its own particles group and its own done-flag chunk), so concurrent tasks on
+A task touches only the files of its own shard (one shard file per sample array, one chunk of
+the parameter table, its own particles group and its own done-flag chunk), so concurrent tasks on
 distinct shards cannot lose data. The done flag is cleared first and set last, and every file
 is written atomically (write-then-rename), so a task killed at any point leaves its shard
 not-done and a retry rewrites it from scratch. The chunk and shard files are encoded and
@@ -19,8 +19,9 @@ from typing import Any
 import numpy as np
 
 from demseis.datasets._shardio import ArrayMeta, write_block
-from demseis.datasets.layout import array_metas, check_store_metadata, fill_value_for, layout_of
+from demseis.datasets.layout import array_metas, check_store_metadata, layout_of
 from demseis.datasets.particles import write_particles
+from demseis.datasets.records import fill_value_for, pack
 from demseis.errors import InputError
 from demseis.schema import SampleArray
 from demseis.types import Snapshot
@@ -38,7 +39,7 @@ def write_shard(
     """Write one complete shard (all samples of one run). One task per shard.
 
     Order: clear the shard's done flag, write every sample array (one shard file each), the
-    parameter chunks, the particle snapshots, and set the done flag last. A kill at any point
+    shard's chunk of the parameter table, the particle snapshots, and set the done flag last. A kill at any point
     leaves the shard not-done; calling again rewrites it (idempotent).
 
     Parameters
@@ -102,9 +103,13 @@ def write_shard(
     sel = layout.shard_slice(k)
     # each file is encoded here and replaces the old one whole (write-then-rename): unlike a
     # write through zarr, nothing reads the old shard file, so a damaged one is no obstacle
-    writes = {**data, **{f"params/{n}": v for n, v in pdata.items()}}
-    for n, v in writes.items():
+    for n, v in data.items():
         _write_array(path, members[n], sel, v)
+    if pdata and layout.table:  # every parameter in one chunk of records (datasets.records)
+        _write_array(path, members["params"], sel, pack(pdata, list(layout.columns.values()), s))
+    else:  # a store assembled by hand with zarr: an array per parameter
+        for n, v in pdata.items():
+            _write_array(path, members[f"params/{n}"], sel, v)
     if particles is not None:
         write_particles(path, run_id, particles)
     _set_flag(path, done, k, 1)
@@ -159,7 +164,7 @@ def _as_param_array(name: str, value: Any, dtype: np.dtype, n: int) -> np.ndarra
 
 def _write_array(store: Path, arr: ArrayMeta, sel: slice, data: np.ndarray) -> None:
     """Write ``data`` as ``arr[sel]`` of the store at ``store``: one whole shard of a sample
-    array or one whole chunk of a parameter, i.e. one file, written atomically with the bytes
+    array or the shard's chunk of the parameter table, i.e. one file, written atomically with the bytes
     zarr would write (:func:`demseis.datasets._shardio.write_block`).
 
     :func:`write_shard` writes every data array of a shard through this one function (tests
@@ -168,7 +173,8 @@ def _write_array(store: Path, arr: ArrayMeta, sel: slice, data: np.ndarray) -> N
     n = (arr.shards or arr.chunks)[0]
     if sel.start % n or sel.stop - sel.start != n:
         raise ValueError(f"{arr.path}: {sel} is not one whole chunk/shard of {n}")
-    write_block(store, arr, sel.start // n, data)
+    # records of zero bytes are data: the table's chunk of a done shard always exists
+    write_block(store, arr, sel.start // n, data, write_empty=arr.path == "params")
 
 
 def _set_flag(store: Path, done: ArrayMeta, k: int, value: int) -> None:

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from demseis.datasets.checked import read_error_text
 from demseis.datasets.layout import open_store, store_layout
+from demseis.datasets.read import read_params
 from demseis.datasets.status import shard_status
 from demseis.errors import DemseisError, StoreError
 
@@ -59,8 +59,6 @@ def to_xarray(path: str | Path) -> Any:
     layout = store_layout(group)
     try:
         ds = xr.open_zarr(path, consolidated=False, zarr_format=3, mask_and_scale=False)
-        pds = xr.open_zarr(path, group="params", consolidated=False, zarr_format=3,
-                           mask_and_scale=False) if layout.params else None
     except Exception as exc:  # noqa: BLE001 - corrupt metadata
         raise StoreError(f"xarray cannot open store {str(path)!r}: {exc}") from exc
     keep = [n for n in layout.arrays]
@@ -70,24 +68,20 @@ def to_xarray(path: str | Path) -> Any:
     clash = {n: f"fault_{n}" for n in keep if n in layout.params}
     ds = ds.rename(clash)
     coords: dict[str, Any] = {}
-    if pds is not None:
-        for name in layout.params:
-            var = pds[name]
-            try:
-                values = np.asarray(var.values)
-            except Exception as exc:  # noqa: BLE001 - a chunk failing its checksum
-                raise StoreError(f"parameter {name!r} of store {str(path)!r} is damaged ({read_error_text(exc)}); "
-                                 "run `demseis validate` to list the damaged shards") from exc
-            cats = var.attrs.get("categories")
-            if cats:
-                codes = values
-                names = np.array(list(cats) + [""], dtype=object)
-                safe = np.where((codes >= 0) & (codes < len(cats)), codes, len(cats))
-                coords[name] = xr.Variable("sample", names[safe].astype(str),
-                                           {k: v for k, v in var.attrs.items()
-                                            if k not in ("flag_values", "flag_meanings")})
-            else:
-                coords[name] = xr.Variable("sample", values, dict(var.attrs))
+    params = read_params(path)  # the table's columns over every sample (fill where not done)
+    for name, column in layout.columns.items():
+        values = params[name]
+        attrs = dict(column.attributes)
+        cats = column.categories
+        if cats:
+            codes = values
+            names = np.array(list(cats) + [""], dtype=object)
+            safe = np.where((codes >= 0) & (codes < len(cats)), codes, len(cats))
+            coords[name] = xr.Variable("sample", names[safe].astype(str),
+                                       {k: v for k, v in attrs.items()
+                                        if k not in ("flag_values", "flag_meanings")})
+        else:
+            coords[name] = xr.Variable("sample", values, attrs)
     done = np.repeat(shard_status(path) == 1, layout.samples_per_shard)
     coords["done"] = xr.Variable("sample", done,
                                  {"units": "1", "long_name": "the sample's shard is complete"})

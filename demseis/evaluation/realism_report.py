@@ -9,7 +9,7 @@ import json
 import numpy as np
 
 from demseis.datasets import open_store, read_sample, store_layout
-from demseis.datasets.read import done_samples
+from demseis.datasets.read import done_samples, read_params
 from demseis.errors import InputError
 from demseis.evaluation.realism import (_section, adjacent_trace_correlation, amplitude_spectrum,
                                         centroid_period, excess_kurtosis,
@@ -125,7 +125,7 @@ class _StoreView:
         self.attrs = dict(root.attrs)
         self.arrays = tuple(self.layout.arrays)
         self.done = done_samples(root, self.layout.n_samples, self.path, require_any=False)
-        self.snr_db = (np.asarray(root["params"]["snr_db"][:], np.float64)
+        self.snr_db = (np.asarray(read_params(self.path)["snr_db"], np.float64)
                        if "snr_db" in self.layout.params else None)
 
     def __len__(self) -> int:

@@ -25,7 +25,7 @@ _CODES_ORDER = ("noise_kind", "dip_direction", "contact_model", "imaging", "stru
 
 
 def param_codes() -> dict[str, tuple[str, ...]]:
-    """Integer codes of every ``str`` per-sample parameter: ``params/<name>`` holds the index
+    """Integer codes of every ``str`` per-sample parameter: the ``params`` table holds the index
     of the value among its declared choices (``fault<k>_kind`` and ``fault<k>_dip_direction``
     index ``fault_kind`` and ``dip_direction``)."""
     names = sorted((k for k, p in SCENARIO.items() if p.kind is str),
@@ -80,7 +80,7 @@ def array_dtypes(cfg: Config) -> dict[str, str]:
 
 
 def param_dtypes() -> dict[str, str]:
-    """Name → dtype of the per-sample parameter arrays (``params/`` in the store)."""
+    """Name → dtype of the per-sample parameter arrays (the columns of the store's ``params`` table)."""
     out = {s.name: s.dtype for s in STORED}
     codes = param_codes()
     for key, pdef in SCENARIO.items():

@@ -37,6 +37,7 @@ from demseis.datasets import (
     write_shard,
     writer_lock,
 )
+from demseis.datasets.index import update_index
 from demseis.datasets.layout import root_metadata_lost
 from demseis.datasets.lock import pid_alive
 from demseis.errors import ConfigError, InputError, SimulationError, StoreError
@@ -86,6 +87,10 @@ class SweepSummary:
     #: one record per finished task: shard, pid, start/end (epoch s), engine_s, render_s, write_s,
     #: cpu_s (CPU seconds of the task's thread)
     tasks: list[dict[str, Any]] = field(default_factory=list)
+    #: time (perf_counter) the index of the parameter table was last brought up to date
+    index_updated: float = field(default_factory=time.perf_counter)
+    #: runs of ``completed`` the index held at that update
+    indexed: int = 0
 
     @property
     def n_samples_written(self) -> int:
@@ -466,6 +471,11 @@ def _account(summary: SweepSummary, bar: Any, result: dict[str, Any]) -> None:
         if result.get("dem_attempt"):
             summary.stabilised[result["shard"]] = result["dem_attempt"]
         bar.update(result["samples"])
+        if time.perf_counter() - summary.index_updated > INDEX_EVERY_S:
+            # readers of a store being written read the shards the index lacks one by one
+            update_index(summary.store, shards=summary.completed[summary.indexed:])
+            summary.indexed = len(summary.completed)
+            summary.index_updated = time.perf_counter()
 
 
 def _connect(scheduler: str) -> Any:
@@ -549,6 +559,10 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
             hidden.close()
         summary.phase_seconds["close"] = time.perf_counter() - t_close
 
+
+#: seconds between the driver's updates of the parameter table's index while a sweep runs
+#: (and once at its end: finalize_store)
+INDEX_EVERY_S = 60.0
 
 #: tasks a sweep keeps submitted at least (4 per worker where there are more workers)
 SUBMIT_WINDOW = 64

@@ -139,3 +139,62 @@ def mini_config(domain: str = "depth"):
     raw["model"].update(n_snapshots=2, width_m=300.0, height_m=200.0)
     raw["output"] = {**raw.get("output", {}), "domain": domain, "impedance": True}
     return parse_config(raw)
+
+
+def set_param(path: Path, name: str, index, value) -> None:
+    """Write ``value`` into parameter ``name`` at sample(s) ``index`` through zarr (the
+    record's bytes in the ``params`` table), as damage a test injects."""
+    import zarr
+
+    from demseis.datasets import read_layout
+    from demseis.datasets.records import record_dtype
+
+    layout = read_layout(path)
+    table = zarr.open_group(path, mode="r+", use_consolidated=False)["params"]
+    rows = np.asarray(table[:]).copy()
+    rec = rows.view(record_dtype(list(layout.columns.values()))).reshape(-1)
+    rec[name][index] = value
+    table[:] = rows
+
+
+def zarr_params(path: Path) -> dict[str, np.ndarray]:
+    """Every parameter of every sample (N,) read through zarr, not demseis's readers: the
+    ``params`` table's bytes viewed as the record its attributes declare (the fill bytes of a
+    shard never written read as zeros)."""
+    import zarr
+
+    table = zarr.open_group(path, mode="r", use_consolidated=False)["params"]
+    cols = table.attrs["demseis"]["columns"]
+    rec = np.asarray(table[:]).view(np.dtype([(c["name"], c["dtype"]) for c in cols])).reshape(-1)
+    return {c["name"]: rec[c["name"]].astype(np.dtype(c["dtype"]).newbyteorder("=")) for c in cols}
+
+
+def drop_param(path: Path, name: str) -> None:
+    """Rewrite the store's parameter table without parameter ``name`` (a store written before
+    that parameter existed), its index emptied and the consolidated metadata dropped."""
+    import json
+    import shutil
+
+    import zarr
+
+    from demseis.datasets import read_layout
+    from demseis.datasets._nodes import create_arrays, put_files, zarr_files
+    from demseis.datasets.create import _table_specs
+    from demseis.datasets.records import record_dtype
+
+    layout = read_layout(path)
+    cols = [c for c in layout.columns.values() if c.name != name]
+    table = zarr.open_group(path, mode="r", use_consolidated=False)["params"]
+    old = np.asarray(table[:]).view(record_dtype(list(layout.columns.values()))).reshape(-1)
+    new = np.zeros(old.shape[0], record_dtype(cols))
+    for c in cols:
+        new[c.name] = old[c.name]
+    for arr in ("params", "params_index", "params_index_files"):
+        shutil.rmtree(path / arr)
+    files = zarr_files(lambda st: create_arrays(st, _table_specs(layout, cols)))
+    put_files(path, {k: v for k, v in files.items() if k != "zarr.json"})
+    meta = json.loads((path / "zarr.json").read_text())
+    meta.pop("consolidated_metadata", None)
+    (path / "zarr.json").write_text(json.dumps(meta))
+    zarr.open_group(path, mode="r+", use_consolidated=False)["params"][:] = (
+        new.view(np.uint8).reshape(old.shape[0], -1))

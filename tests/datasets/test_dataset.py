@@ -14,7 +14,7 @@ from torch.utils.data import DataLoader
 from demseis.datasets import FaultSegDataset, ShardAwareSampler, open_store, split_of_shards
 from demseis.datasets.dataset import crop_offsets
 from demseis.errors import InputError
-from tests.datasets._helpers import make_store
+from tests.datasets._helpers import make_store, zarr_params
 
 SHAPE = (24, 32)
 S = 6
@@ -60,8 +60,8 @@ def test_split_of_shards_fractions_and_stability():
 
 def test_where_filters(store):
     g = open_store(store)
-    freq = g["params"]["freq_hz"][:]
-    snr = g["params"]["snr_db"][:]
+    stored = zarr_params(store)
+    freq, snr = stored["freq_hz"], stored["snr_db"]
     done = np.repeat(g["shard_done"][:] == 1, S)
 
     def expect(mask):
@@ -76,7 +76,7 @@ def test_where_filters(store):
         expect(np.isin(freq, [20, 60]) & np.isinf(snr)))
     np.testing.assert_array_equal(
         FaultSegDataset(store, where=lambda p: (p["snapshot"] == 2) & (p["run_id"] < 5)).indices,
-        expect((g["params"]["snapshot"][:] == 2) & (g["params"]["run_id"][:] < 5)))
+        expect((stored["snapshot"] == 2) & (stored["run_id"] < 5)))
     with pytest.raises(InputError, match="unknown parameter 'dip'"):
         FaultSegDataset(store, where={"dip": 3})
     with pytest.raises(InputError, match="bool array"):

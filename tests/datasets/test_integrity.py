@@ -16,6 +16,7 @@ import pytest
 import demseis
 import demseis.datasets._shardio as shardio
 import demseis.datasets.dataset as dataset
+from demseis.datasets.index import update_index
 from demseis.cli import main
 from demseis.datasets import (
     FaultSegDataset,
@@ -89,7 +90,7 @@ def _flip_seismic_index(path):
 
 
 def _flip_param(path):
-    _flip(path / "params" / "freq_hz" / "c" / "2", 3)
+    _flip(path / "params" / "c.2.0", 3)
 
 
 def _flip_particles(path):
@@ -106,7 +107,7 @@ CASES = {
     "fault-blosc": (_flip_fault, "shard 2: fault is damaged in samples 15 (crc32c mismatch)"),
     "seismic-index": (_flip_seismic_index,
                       "shard 2: seismic is damaged in samples 12..17 (index crc32c mismatch"),
-    "params": (_flip_param, "shard 2: parameter freq_hz is damaged in samples 12..17"),
+    "params": (_flip_param, "shard 2: parameters are damaged in samples 12..17"),
     "particles": (_flip_particles, "shard 2: particles of run 2 are damaged: x_m (crc32c mismatch)"),
     "done-flag": (_flip_done, "shard 2: done flag is damaged (crc32c mismatch)"),
 }
@@ -271,11 +272,16 @@ def test_plot_of_a_damaged_or_pending_sample_fails_clearly(tmp_path, capsys):
 def test_info_of_a_store_with_a_damaged_parameter_is_one_line(tmp_path, pristine, capsys):
     path = _copy(pristine, tmp_path / "s.zarr")
     assert main(["info", str(path)]) == 0
+    assert update_index(path) == 4  # every done shard indexed (sweeps do it as they end)
     _flip_param(path)
+    # the index holds a checksummed copy of the shard's records: readers still get them
+    assert main(["info", str(path)]) == 0
+    for f in (path / "params_index_files").glob("c.*"):  # without the index
+        f.unlink()
     capsys.readouterr()
     assert main(["info", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "samples 12..17 of parameter 'freq_hz'" in err[0]
+    assert len(err) == 1 and "parameters of samples 12..17" in err[0]
     assert "damaged (crc32c mismatch" in err[0], err[0]
 
 

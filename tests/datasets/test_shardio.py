@@ -24,6 +24,7 @@ from zarr.codecs import BloscCodec, BytesCodec, Crc32cCodec, ZstdCodec
 import demseis.datasets._shardio as shardio
 from demseis.datasets import (
     create_store,
+    read_layout,
     read_particles,
     remove_partial_writes,
     shard_status,
@@ -31,7 +32,7 @@ from demseis.datasets import (
 )
 from demseis.datasets._nodes import small_compressors
 from demseis.datasets._shardio import array_meta, is_fill, temporary_name, write_block
-from demseis.datasets.layout import fill_value_for
+from demseis.datasets.records import fill_value_for, record_dtype
 from demseis.datasets.particles import PARTICLE_FIELDS, particle_group_name
 from demseis.types import Snapshot
 from tests.datasets._helpers import (
@@ -42,6 +43,7 @@ from tests.datasets._helpers import (
     every_array_dtypes,
     every_array_shard,
     grid_attrs,
+    zarr_params,
 )
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -60,8 +62,11 @@ def _zarr_write_shard(path: Path, k: int, arrays: dict, params: dict,
     for name, value in arrays.items():
         (path / name / "c" / str(k) / "0" / "0").unlink(missing_ok=True)
         g[name][sel] = value
+    layout = read_layout(path)
+    rec = np.zeros(S, dtype=record_dtype(list(layout.columns.values())))
     for name, value in params.items():
-        g["params"][name][sel] = np.asarray(value).astype(PARAM_DTYPES[name])
+        rec[name] = np.asarray(value).astype(PARAM_DTYPES[name])
+    g["params"][sel] = rec.view(np.uint8).reshape(S, -1)
     if particles is not None:
         counts = np.array([sn.ids.shape[0] for sn in particles], dtype=np.int64)
         data = {
@@ -112,8 +117,9 @@ def test_write_shard_gives_zarrs_bytes_for_every_array(tmp_path):
     for name, value in arrays.items():
         np.testing.assert_array_equal(g[name][:S], value)
         assert np.signbit(g[name][:S]).tolist() == np.signbit(value).tolist()
+    stored = zarr_params(direct)
     for name, value in params.items():
-        np.testing.assert_array_equal(g["params"][name][:S], value)
+        np.testing.assert_array_equal(stored[name][:S], value)
     assert np.isnan(g["seismic"][S:2 * S]).all()  # shard 1 never written: the fill value
     got = read_particles(direct, 0)
     for sn, want in zip(got, snaps, strict=True):

@@ -19,6 +19,7 @@ from demseis.datasets import (
     finalize_store,
     open_store,
     read_layout,
+    read_params,
     read_particles,
     read_store_attrs,
     record_failures,
@@ -29,9 +30,9 @@ from demseis.datasets import (
     write_shard,
 )
 from demseis.datasets._shardio import RawShardReader, raw_shard_layout
-from demseis.datasets.layout import fill_value_for
+from demseis.datasets.records import fill_value_for
 from demseis.errors import InputError, StoreError
-from tests.datasets._helpers import ARRAYS, PARAMS, grid_attrs, make_store, shard_data
+from tests.datasets._helpers import ARRAYS, PARAMS, grid_attrs, make_store, shard_data, zarr_params
 
 
 def _tree_digest(path: Path) -> dict[str, str]:
@@ -65,8 +66,10 @@ def test_round_trip_random_shapes(tmp_path_factory, h, w, s, n_shards, with_impe
             got = group[name][sl]
             assert got.dtype == arr.dtype
             np.testing.assert_array_equal(got, arr)
+        stored = zarr_params(path)
+        assert all(np.array_equal(read_params(path)[n][sl], stored[n][sl]) for n in params)
         for name, v in params.items():
-            got = group["params"][name][sl]
+            got = stored[name][sl]
             np.testing.assert_array_equal(got, np.asarray(v).astype(PARAMS[name]))
         back = read_particles(path, k)
         assert len(back) == len(parts)
@@ -100,7 +103,8 @@ def test_layout_and_attrs(tmp_path):
     g = open_store(path)
     assert g["seismic"].chunks == (1, 8, 9) and g["seismic"].shards == (5, 8, 9)
     assert g["shard_done"].chunks == (1,)
-    assert g["params"]["snr_db"].chunks == (5,)
+    assert g["params"].chunks == (5, g["params"].shape[1])  # one chunk of records per shard
+    assert lay.table and set(lay.columns) == set(PARAMS)
 
 
 def test_same_inputs_same_bytes_whatever_the_write_order(tmp_path):
@@ -167,8 +171,10 @@ def test_open_store_errors(tmp_path, setup, message):
 
 
 @pytest.mark.parametrize("version, message", [
-    (99, r"schema version 99 but this demseis .* reads schema version 2$"),
-    (1, r"schema version 1 but this demseis .* reads schema version 2; it was written by an "
+    (99, r"schema version 99 but this demseis .* reads schema version 3$"),
+    (2, r"schema version 2 but this demseis .* reads schema version 3; convert it with `demseis "
+        r"migrate "),
+    (1, r"schema version 1 but this demseis .* reads schema version 3; it was written by an "
         r"older demseis: regenerate it"),
 ])
 def test_open_store_other_schema_version(tmp_path, version, message):
@@ -258,3 +264,24 @@ def test_layer_minus_one_means_no_rock_and_is_valid(tmp_path):
     d["layer"][0, 5, 5] = -2
     with pytest.raises(InputError, match="layer.*allowed \\[-1, 32767\\]"):
         write_shard(path, 0, d, p, parts)
+
+
+def test_a_store_written_before_a_parameter_existed_resumes_with_it(tmp_path):
+    """create_store with one more parameter: the table is declared anew and the done shards
+    become pending (their records lack it), so the sweep computes them again; the samples
+    stay until then."""
+    old = {k: v for k, v in PARAMS.items() if k != "snr_db"}
+    path = make_store(tmp_path / "s.zarr", params=old)
+    seismic = (path / "seismic" / "c" / "1" / "0" / "0").read_bytes()
+    create_store(path, n_shards=4, samples_per_shard=6, shape=(24, 32), arrays=list(ARRAYS),
+                 params=PARAMS)
+    assert shard_status(path).tolist() == [0, 0, 0, 0]
+    assert set(read_layout(path).params) == set(PARAMS)
+    assert (path / "seismic" / "c" / "1" / "0" / "0").read_bytes() == seismic
+    for k in range(4):
+        write_shard(path, k, *shard_data(k, 6, (24, 32)))
+    assert validate_store(path).ok
+    np.testing.assert_array_equal(read_params(path)["snr_db"], zarr_params(path)["snr_db"])
+    with pytest.raises(StoreError, match="another layout"):  # fewer parameters: refused
+        create_store(path, n_shards=4, samples_per_shard=6, shape=(24, 32), arrays=list(ARRAYS),
+                     params=old)

@@ -110,6 +110,36 @@ def test_ctrl_c_of_a_read_only_command_says_nothing_about_resuming(tmp_path, mon
     assert capsys.readouterr().err.strip() == "demseis: interrupted"
 
 
+def test_ctrl_c_inside_a_class_creation_is_an_interrupt(tmp_path, monkeypatch, capsys):
+    """Python 3.11 turns a Ctrl-C that lands while a class is created (e.g. dask's expression
+    classes, imported as a sweep's cluster starts) into "RuntimeError: Error calling
+    __set_name__" caused by the KeyboardInterrupt: the CLI says its one line, exit 130; any
+    other RuntimeError still propagates."""
+    import demseis.datasets.validate as validate
+    from demseis.cli import main
+
+    class Name:
+        def __set_name__(self, owner, name):
+            raise KeyboardInterrupt
+
+    def create_class(*args, **kwargs):
+        type("Expr", (), {"_funcname": Name()})
+
+    from tests.datasets._helpers import make_store
+
+    make_store(tmp_path / "s.zarr")
+    monkeypatch.setattr(validate, "validate_store", create_class)
+    assert main(["validate", str(tmp_path / "s.zarr")]) == 130
+    assert capsys.readouterr().err.strip() == "demseis: interrupted"
+
+    def other(*args, **kwargs):
+        raise RuntimeError("not an interrupt")
+
+    monkeypatch.setattr(validate, "validate_store", other)
+    with pytest.raises(RuntimeError, match="not an interrupt"):
+        main(["validate", str(tmp_path / "s.zarr")])
+
+
 def _shm_files() -> set[str]:
     """The POSIX semaphores and shared-memory blocks multiprocessing leaves in /dev/shm."""
     import glob

@@ -20,7 +20,7 @@ import pytest
 
 from demseis.datasets import open_store, read_particles, shard_status, validate_store, write_shard
 from tests._helpers import ROOT
-from tests.datasets._helpers import make_store, shard_data
+from tests.datasets._helpers import make_store, shard_data, zarr_params
 
 SHAPE = (24, 32)
 S = 6
@@ -73,7 +73,8 @@ def _check_resumed(path: Path, n_shards: int, s: int, shape) -> None:
         data, params, parts = shard_data(k, s, shape)
         for name, arr in data.items():
             np.testing.assert_array_equal(g[name][k * s:(k + 1) * s], arr)
-        np.testing.assert_array_equal(g["params"]["run_id"][k * s:(k + 1) * s], params["run_id"])
+        np.testing.assert_array_equal(zarr_params(path)["run_id"][k * s:(k + 1) * s],
+                                      params["run_id"])
         np.testing.assert_array_equal(read_particles(path, k)[-1].xy, parts[-1].xy)
 
 
@@ -94,10 +95,9 @@ def test_kill_9_mid_shard_then_resume(tmp_path, stop):
     assert shard_status(path).tolist() == [1, 1, 0, 0]
     g = open_store(path, "r+")
     assert len(written) == (3 if stop == "mid-arrays" else 0)
-    data, params, _ = shard_data(2, S, SHAPE)
-    for name in written:  # the child did write these arrays of shard 2
-        want = params[name[len("params/"):]] if name.startswith("params/") else data[name]
-        np.testing.assert_array_equal(g[name][2 * S:3 * S], want)
+    data, _, _ = shard_data(2, S, SHAPE)
+    for name in written:  # the child did write these sample arrays of shard 2
+        np.testing.assert_array_equal(g[name][2 * S:3 * S], data[name])
     report = validate_store(path)
     assert report.ok and report.n_done == 2, report.problems
     _check_resumed(path, 4, S, SHAPE)

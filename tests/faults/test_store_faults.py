@@ -154,7 +154,7 @@ def test_kill_9_of_the_driver_mid_shard_then_resume(tmp_path, reference, trial):
     assert digest(out) == digest(ref)
 
 
-@pytest.mark.parametrize("target", ["seismic/c/1/0/0", "fault/c/1/0/0", "params/throw_m/c/1",
+@pytest.mark.parametrize("target", ["seismic/c/1/0/0", "fault/c/1/0/0", "params/c.1.0",
                                     "particles/run_00001/x_m/c/0", "shard_done/c/1"])
 def test_bit_flip_in_a_done_shard_is_regenerated_by_resume(tmp_path, reference, target):
     cfg, ref = reference

@@ -8,6 +8,7 @@ import zarr
 
 from demseis.cli import main
 from tests.generator._helpers import assert_same_bytes, tree_bytes
+from tests._helpers import params_of
 
 
 def test_tiny_store_contents(tiny_store):
@@ -21,13 +22,13 @@ def test_tiny_store_contents(tiny_store):
     s = seis[:]
     assert not np.isnan(s).any()
     assert np.abs(s).max() > 0
-    snap = root["params/snapshot"][:]
+    snap = params_of(root)["snapshot"]
     f = fault[:].reshape(n, -1).sum(axis=1)
     # slip-trace labels need a measured jump >= min_slip_m, so a faulted snapshot can hold none:
     # run 1 of `tiny` (60 deg) has a 55 m trace at 50 m throw and none at 100 m, where its shear
     # zone is wider than the jump window (a known limit, docs/labels.md). has_fault says which.
-    assert np.array_equal(root["params/has_fault"][:], (f > 0).astype(np.uint8))
-    run = root["params/run_id"][:]
+    assert np.array_equal(params_of(root)["has_fault"], (f > 0).astype(np.uint8))
+    run = params_of(root)["run_id"]
     for r in np.unique(run):
         assert f[(run == r) & (snap > 0)].max() > 0, f"run {r}: no fault in any faulted snapshot"
     assert np.all(f[snap == 0] == 0), "fault mask non-empty before any faulting"
@@ -62,7 +63,7 @@ def test_resume_removes_killed_writers_temporary_files(tiny_store, tmp_path):
 
     out = tmp_path / "copy.zarr"
     shutil.copytree(tiny_store, out)
-    stale = [out / "params" / "dip_deg" / "c" / f"0.{'ab' * 16}.partial",
+    stale = [out / "params" / f"c.0.0.{'ab' * 16}.partial",
              out / "seismic" / "c" / "1" / "0" / f"0.{'0f' * 16}.partial"]
     for f in stale:
         f.write_bytes(b"half a chunk")
@@ -170,12 +171,12 @@ def test_render_reuses_particles(tiny_store, tmp_path):
     new = zarr.open_group(str(out), mode="r")
     n_snap = src.attrs["config"]["model"]["n_snapshots"]
     assert new["seismic"].shape[0] == 3 * n_snap * 2
-    assert sorted(set(new["params/freq_hz"][:].tolist())) == [25.0, 50.0]
+    assert sorted(set(params_of(new)["freq_hz"].tolist())) == [25.0, 50.0]
     # the labels come from the same particles: identical to the source's, snapshot by snapshot
     for run in (0, 1, 2):
         for k in range(n_snap):
-            a = src["fault"][np.flatnonzero((src["params/run_id"][:] == run) & (src["params/snapshot"][:] == k))[0]]
-            b = new["fault"][np.flatnonzero((new["params/run_id"][:] == run) & (new["params/snapshot"][:] == k))[0]]
+            a = src["fault"][np.flatnonzero((params_of(src)["run_id"] == run) & (params_of(src)["snapshot"] == k))[0]]
+            b = new["fault"][np.flatnonzero((params_of(new)["run_id"] == run) & (params_of(new)["snapshot"] == k))[0]]
             np.testing.assert_array_equal(a, b)
     assert main(["validate", str(out)]) == 0
 
@@ -262,7 +263,7 @@ def test_time_domain_output(tmp_path):
     assert root["seismic"].shape == root["fault"].shape == (6, nt, nx)
     assert nt != grid["nz"]
     fault = root["fault"][:]
-    snap = root["params/snapshot"][:]
+    snap = params_of(root)["snapshot"]
     assert fault[snap > 0].sum() > 0 and fault[snap == 0].sum() == 0
     assert main(["validate", str(out)]) == 0
     assert main(["export-segy", str(out), "--sample", "5", "--out", str(tmp_path / "t.sgy")]) == 0

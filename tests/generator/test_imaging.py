@@ -10,6 +10,7 @@ import zarr
 
 from demseis.cli import main
 from tests.generator._helpers import generate_tiny
+from tests._helpers import params_of
 
 
 @pytest.fixture(scope="module")
@@ -22,8 +23,8 @@ def both_store(tmp_path_factory) -> Path:
 
 def _pairs(root):
     """(1-D index, PSF index) of the samples of the same run and snapshot."""
-    run, snap = root["params/run_id"][:], root["params/snapshot"][:]
-    img = root["params/imaging"][:]
+    run, snap = params_of(root)["run_id"], params_of(root)["snapshot"]
+    img = params_of(root)["imaging"]
     out = []
     for i in np.flatnonzero(img == 0):
         j = np.flatnonzero((img == 1) & (run == run[i]) & (snap == snap[i]))
@@ -35,10 +36,10 @@ def _pairs(root):
 def test_imaging_is_drawn_and_recorded_per_sample(both_store):
     root = zarr.open_group(str(both_store), mode="r")
     assert list(root.attrs["param_codes"]["imaging"]) == ["1d", "psf"]
-    img = root["params/imaging"][:]
+    img = params_of(root)["imaging"]
     assert root["seismic"].shape[0] == 3 * 3 * 2               # runs x snapshots x imaging
     assert sorted(set(img.tolist())) == [0, 1]
-    np.testing.assert_array_equal(root["params/psf_max_angle_deg"][:], 25.0)
+    np.testing.assert_array_equal(params_of(root)["psf_max_angle_deg"], 25.0)
     pairs = _pairs(root)
     assert len(pairs) == 9
     for i, j in pairs:
@@ -55,7 +56,7 @@ def test_the_1d_samples_are_the_default_render(both_store, tmp_path):
     out = generate_tiny(tmp_path, "[sweep]\nsnr_db = inf\n", "one")
     one = zarr.open_group(str(out), mode="r")
     both = zarr.open_group(str(both_store), mode="r")
-    np.testing.assert_array_equal(one["params/imaging"][:], 0)
+    np.testing.assert_array_equal(params_of(one)["imaging"], 0)
     i1d = [i for i, _ in _pairs(both)]
     np.testing.assert_array_equal(both["seismic"][i1d], one["seismic"][:])
 
@@ -74,11 +75,11 @@ def test_render_an_existing_store_with_the_psf(both_store, tmp_path):
                  "--quiet"]) == 0
     new = zarr.open_group(str(out), mode="r")
     assert new["seismic"].shape[0] == 3 * 3 * 2               # runs x snapshots x angles
-    np.testing.assert_array_equal(new["params/imaging"][:], 1)
-    assert sorted(set(new["params/psf_max_angle_deg"][:].tolist())) == [20.0, 45.0]
-    np.testing.assert_array_equal(new["params/psf_aperture_m"][:], 500.0)
+    np.testing.assert_array_equal(params_of(new)["imaging"], 1)
+    assert sorted(set(params_of(new)["psf_max_angle_deg"].tolist())) == [20.0, 45.0]
+    np.testing.assert_array_equal(params_of(new)["psf_aperture_m"], 500.0)
     # a narrower angle removes more of the energy
-    ang = new["params/psf_max_angle_deg"][:]
+    ang = params_of(new)["psf_max_angle_deg"]
     r20 = np.sqrt(np.mean(new["seismic"][np.flatnonzero(ang == 20)].astype(np.float64) ** 2))
     r45 = np.sqrt(np.mean(new["seismic"][np.flatnonzero(ang == 45)].astype(np.float64) ** 2))
     assert r20 < r45
@@ -90,7 +91,7 @@ def test_render_keeps_the_source_imaging_by_default(both_store, tmp_path):
     assert main(["render", str(both_store), "--freq", "30", "--out", str(out), "--quiet"]) == 0
     src = zarr.open_group(str(both_store), mode="r")
     new = zarr.open_group(str(out), mode="r")
-    np.testing.assert_array_equal(new["params/imaging"][:], src["params/imaging"][:])
+    np.testing.assert_array_equal(params_of(new)["imaging"], params_of(src)["imaging"])
     np.testing.assert_array_equal(new["seismic"][:], src["seismic"][:])
 
 

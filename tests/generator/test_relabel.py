@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from demseis.cli import main
+from tests._helpers import params_of
 
 
 def _relabel_strain_band(src, tmp_path):
@@ -46,7 +47,7 @@ def test_relabel_keeps_seismic_bytes_and_changes_labels(tmp_path):
     assert main(["generate", "--preset", "tiny", "--out", str(src), "--workers", "0",
                  "--quiet"]) == 0
     a, b = _relabel_strain_band(src, tmp_path)
-    assert a["params/has_fault"][:].sum() > 0
+    assert params_of(a)["has_fault"].sum() > 0
     assert (a["slip_m"][:] > 0).any() and not (b["slip_m"][:] > 0).any()  # strain_band: no slip
     assert main(["validate", str(dst)]) == 0
 
@@ -86,7 +87,7 @@ def test_a_store_from_before_the_picks_keeps_its_traces_and_relabel_picks_them(t
     again = tmp_path / "again.zarr"
     rerender(src, again, freqs_hz=[30.0], snrs_db=[float("inf")], progress=False)
     a, b = zarr.open(str(src), mode="r"), zarr.open(str(again), mode="r")
-    key = lambda g, i: (int(g["params/run_id"][i]), int(g["params/snapshot"][i]))  # noqa: E731
+    key = lambda g, i: (int(params_of(g)["run_id"][i]), int(params_of(g)["snapshot"][i]))  # noqa: E731
     first = {}
     for i in range(a["fault"].shape[0]):
         first.setdefault(key(a, i), i)

@@ -10,6 +10,7 @@ from demseis.cli import main
 from demseis.evaluation.realism import (adjacent_trace_correlation, expected_lags, intact_mask,
                                         offset_agreement)
 from tests.generator._helpers import assert_same_bytes, generate_tiny
+from tests._helpers import params_of
 
 SURVEY = """
 [sweep]
@@ -62,7 +63,7 @@ def test_kinematic_offsets_equal_the_labelled_throw(tmp_path):
                                             "throw_m = 25\ndip_deg = [70, 80]"), "k")
     root = zarr.open_group(str(store), mode="r")
     hits = tested = 0
-    for i in np.flatnonzero(root["params/snapshot"][:] > 0):
+    for i in np.flatnonzero(params_of(root)["snapshot"] > 0):
         z = root["impedance"][i].astype(np.float64)
         vp = (np.maximum(z, 1.0) / 310.0) ** (1.0 / 1.25)        # Gardner, the default rock
         throw = root["slip_m"][i] * np.sin(np.radians(root["dip_deg"][i]))
@@ -77,7 +78,7 @@ def test_kinematic_offsets_equal_the_labelled_throw(tmp_path):
 def test_strata_sections_are_laterally_continuous_but_not_flat(kin_strata, dem_strata):
     for store in (kin_strata, dem_strata):
         root = zarr.open_group(str(store), mode="r")
-        i = int(np.flatnonzero(root["params/snapshot"][:] == 0)[0])     # undeformed, 30 Hz
+        i = int(np.flatnonzero(params_of(root)["snapshot"] == 0)[0])     # undeformed, 30 Hz
         sec = root["seismic"][i]
         r = adjacent_trace_correlation(sec, intact_mask(root["fault"][i]) & (sec != 0))
         assert 0.85 < r < 0.995, (store.name, r)
@@ -114,8 +115,8 @@ def test_psf_images_the_strata_at_the_traces(tmp_path, domain):
     store = generate_tiny(tmp_path, toml.replace('domain = "time"', f'domain = "{domain}"'),
                           "p")
     root = zarr.open_group(str(store), mode="r")
-    imaging = root["params/imaging"][:]
-    snap = root["params/snapshot"][:]
+    imaging = params_of(root)["imaging"]
+    snap = params_of(root)["snapshot"]
     one, psf = (np.flatnonzero((imaging == k) & (snap == 0))[0] for k in (0, 1))
     a, b = root["seismic"][one], root["seismic"][psf]
     assert a.shape == b.shape and np.isfinite(b).all()

@@ -52,7 +52,7 @@ class State:
     labels : (nz, nx) depth-grid map of every label the engine makes
         (:func:`demseis.schema.engine_labels`: ``fault``, ``damage``, ``strain``, ``layer``,
         ``fault_id``, ``slip_m``, ``dip_deg``, ``sense``), with the schema's dtypes.
-    values : per-sample values of this state stored in ``params/``: ``step``, ``throw_m``
+    values : per-sample values of this state stored in the ``params`` table: ``step``, ``throw_m``
         (the master fault's throw so far), ``n_elements`` and ``fault<k>_throw_m``.
     reference : where the rock of each point came from, for the ``strata`` rendering (None
         where the sweep renders ``elements``): ``reference(x_m, depth_m) -> (x0_m, y0_m,

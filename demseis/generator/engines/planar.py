@@ -38,9 +38,9 @@ IM35-IM45, in 2D as its public re-implementations make it. A run is:
    reverse), so younger faults offset older ones.
 
 The run-level parameters ``dip_deg``, ``throw_m``, ``n_faults``, ``structure`` (the DEM's
-basement) are not used; ``params/fault<k>_*`` hold the first five faults by x (where they
-meet the base of the model), ``params/n_basement_faults`` the number of faults and
-``params/fault_x_m``, ``throw_target_m`` and ``dip_deg`` the fault of largest throw's.
+basement) are not used; the parameters ``fault<k>_*`` hold the first five faults by x (where they
+meet the base of the model), ``n_basement_faults`` the number of faults and
+``fault_x_m``, ``throw_target_m`` and ``dip_deg`` the fault of largest throw's.
 
 Snapshot ``k`` of ``n_snapshots`` holds the fraction ``k / (n - 1)`` of every throw (snapshot 0
 folded and sheared, unfaulted), as in the kinematic engine. A sample is computed backwards,
