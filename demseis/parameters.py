@@ -403,6 +403,11 @@ _DECLARED: tuple[Param, ...] = (
        doc="fill hanging-wall accommodation with growth layers"),
     _p("wall_speed_m_s", float, "sweep", 5.0, 1.0e-3, 100.0, unit="m/s", section="model",
        doc="speed of the moving basement along dip (model time)"),
+    _p("pack_library", int, "sweep", 0, 0, 100000, section="model",
+       doc="dem engine: settled packs the runs draw from, each settled once per box, radii and "
+           "settling material and cached on disk (DEMSEIS_PACK_CACHE, default "
+           "~/.cache/demseis/packs); every run still draws its own layering, rock and faults; "
+           "0 = every run settles its own pack"),
     # ---- [grid] ----------------------------------------------------------------------------
     _p("cell_m", float, "sweep", 10.0, 0.5, 1000.0, unit="m", section="grid",
        doc="raster cell size (seismic and labels share the grid)"),

@@ -16,7 +16,7 @@ model, or where it was deposited)::
 geometry; ``build_assembly(..., pack=...)`` then only assigns layers.
 """
 
-from demseis.dem.assembly import Assembly, Pack, build_assembly, settle_pack
+from demseis.dem.assembly import Assembly, Pack, PackCacheWarning, build_assembly, settle_pack
 from demseis.dem.integrator import Integrator, time_step
 from demseis.dem.basement import BasementFault, FaultSystem
 from demseis.dem.fault import simulate
@@ -30,5 +30,5 @@ from demseis.dem.reference import (
 from demseis.dem.types import BRITTLE, Material, NormalFault
 
 __all__ = ["BRITTLE", "Assembly", "BasementFault", "FaultSystem", "Integrator", "MapInfo", "Material",
-           "NormalFault", "Pack", "ReferenceMap", "build_assembly", "element_maps",
+           "NormalFault", "Pack", "PackCacheWarning", "ReferenceMap", "build_assembly", "element_maps",
            "reference_coordinates", "reference_map", "settle_pack", "simulate", "time_step"]

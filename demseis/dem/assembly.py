@@ -7,7 +7,9 @@ Two stages, so the expensive one can be reused:
    disks are dropped from a loose row arrangement and settled frictionless, then friction is
    switched on and the pack settles again; disks with centres above ``height_m`` are cut.
    It depends only on geometry, radii range, material and seed, so it can be cached on disk
-   (``cache_dir``) and reused by every run with the same geometry.
+   (``cache_dir``) and reused by every run with the same geometry: each cache file holds a
+   SHA-256 of its inputs and its arrays, checked on load (a damaged file is settled again, with
+   a :class:`PackCacheWarning`), and is written atomically (safe for concurrent workers).
 2. :func:`build_assembly` assigns layers by initial centre height (equal or given thicknesses)
    and returns an :class:`Assembly` ready for :func:`demseis.dem.simulate`.
 """
@@ -18,6 +20,8 @@ import hashlib
 import json
 import math
 import os
+import tempfile
+import warnings
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
@@ -36,6 +40,13 @@ _SETTLE_RATE = 0.5
 _FALL_RATE = 0.15
 #: contact softening of the frictionless settling stage
 _SETTLE_SOFTEN = 4.0
+#: version of the settling recipe and of the cache file format (part of every cache key)
+#: v2: radii drawn with detmath (CPU-independent); v3: checksummed cache files
+_CACHE_VERSION = 3
+
+
+class PackCacheWarning(UserWarning):
+    """A settled-pack cache file was damaged (unreadable or its checksum wrong) and is rebuilt."""
 
 
 @dataclass(frozen=True)
@@ -150,7 +161,9 @@ def settle_pack(width_m: float, height_m: float, *, radius_min_m: float = 12.5,
     material : contact stiffness, density, friction used for the settling.
     rng : Generator or int seed. With ``cache_dir`` an int seed is needed to name the cache
         entry (a Generator's current state is hashed otherwise).
-    cache_dir : directory of ``.npz`` cache files; a hit skips the settling entirely.
+    cache_dir : directory of ``.npz`` cache files (:func:`pack_cache_path`); a hit skips the
+        settling entirely. Each file holds its inputs and a SHA-256 of them and its arrays,
+        verified on load: a damaged file warns (:class:`PackCacheWarning`) and is settled again.
     progress : optional callable(fraction).
 
     Returns
@@ -174,16 +187,15 @@ def settle_pack(width_m: float, height_m: float, *, radius_min_m: float = 12.5,
         seed_key = json.dumps(rng.bit_generator.state, sort_keys=True, default=str)
     else:
         raise InputError(f"rng={rng!r} must be a numpy Generator or an int seed")
-    key = None
+    path = key = None
     if cache_dir is not None:
-        blob = json.dumps({"w": width_m, "h": height_m, "rmin": radius_min_m,
-                           "rmax": radius_max_m, "mat": asdict(material), "seed": seed_key,
-                           "v": 2}, sort_keys=True)  # v2: radii drawn with detmath (CPU-independent)
-        key = hashlib.sha256(blob.encode()).hexdigest()[:20]
-        path = Path(cache_dir) / f"pack_{key}.npz"
-        if path.exists():
-            with np.load(path) as z:
-                return Pack(z["xy"].copy(), z["radius"].copy(), float(width_m), float(height_m))
+        key = json.dumps({"w": float(width_m), "h": float(height_m),
+                          "rmin": float(radius_min_m), "rmax": float(radius_max_m), "mat": asdict(material), "seed": seed_key,
+                          "v": _CACHE_VERSION}, sort_keys=True)
+        path = pack_cache_path(cache_dir, key)
+        pack = _load_cached(path, key, width_m, height_m)
+        if pack is not None:
+            return pack
     mean_area = math.pi * (radius_max_m**2 - radius_min_m**2) / (
         2 * float(detmath.log(radius_max_m / radius_min_m))) if radius_max_m > radius_min_m else (
         math.pi * radius_min_m**2)
@@ -226,12 +238,73 @@ def settle_pack(width_m: float, height_m: float, *, radius_min_m: float = 12.5,
         progress(1.0)
     keep = eng.pos[:, 1] <= height_m
     pack = Pack(eng.pos[keep].copy(), eng.radius[keep].copy(), float(width_m), float(height_m))
-    if key is not None:
-        Path(cache_dir).mkdir(parents=True, exist_ok=True)
-        tmp = Path(cache_dir) / f".pack_{key}.{os.getpid()}.npz"
-        np.savez(tmp, xy=pack.xy, radius=pack.radius)
-        os.replace(tmp, Path(cache_dir) / f"pack_{key}.npz")
+    if path is not None:
+        _write_cached(path, key, pack)
     return pack
+
+
+def pack_cache_path(cache_dir: str | os.PathLike, key: str) -> Path:
+    """The cache file of the pack whose inputs are ``key`` (a canonical JSON string):
+    ``cache_dir/pack_<first 20 hex digits of its SHA-256>.npz``."""
+    return Path(cache_dir) / f"pack_{hashlib.sha256(key.encode()).hexdigest()[:20]}.npz"
+
+
+def _pack_digest(key: str, xy: np.ndarray, radius: np.ndarray) -> str:
+    """SHA-256 of a pack's inputs and arrays (little-endian float64 bytes)."""
+    h = hashlib.sha256(key.encode())
+    for a in (xy, radius):
+        h.update(np.ascontiguousarray(a, dtype="<f8").tobytes())
+    return h.hexdigest()
+
+
+def _load_cached(path: Path, key: str, width_m: float, height_m: float) -> Pack | None:
+    """The pack cached at ``path``, or None when there is none; a file that cannot be read, was
+    made from other inputs or fails its checksum is reported (:class:`PackCacheWarning`) and
+    treated as absent (it is settled again and replaced)."""
+    if not path.exists():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            xy, radius = z["xy"].copy(), z["radius"].copy()
+            stored_key, stored_sum = str(z["key"]), str(z["sha256"])
+        if stored_key != key:
+            why = "made from other inputs"
+        elif stored_sum != _pack_digest(key, xy, radius):
+            why = "checksum mismatch"
+        elif xy.ndim != 2 or xy.shape != (radius.shape[0], 2):
+            why = f"arrays of shapes {xy.shape} and {radius.shape}"
+        else:
+            return Pack(xy, radius, float(width_m), float(height_m))
+    except Exception as exc:  # noqa: BLE001 - any unreadable file (zip, npy, missing entry)
+        why = f"unreadable: {type(exc).__name__}: {exc}"
+    warnings.warn(f"settled-pack cache file {str(path)!r} is damaged ({why}); settling the "
+                  "pack again", PackCacheWarning, stacklevel=3)
+    return None
+
+
+def _write_cached(path: Path, key: str, pack: Pack) -> None:
+    """Write ``pack`` to ``path`` atomically: a unique temporary file in the same directory,
+    then a rename, so readers see the old file or the whole new one, and workers settling the
+    same pack at once each write identical arrays. A cache that cannot be written warns
+    (:class:`PackCacheWarning`); the pack is still used."""
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".tmp", dir=path.parent)
+        os.fchmod(fd, 0o644)   # mkstemp makes 0600; a shared cache is read by others
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, xy=pack.xy, radius=pack.radius, key=np.array(key),
+                     sha256=np.array(_pack_digest(key, pack.xy, pack.radius)))
+        os.replace(tmp, path)
+    except OSError as exc:
+        warnings.warn(f"settled-pack cache {str(path.parent)!r} cannot be written ({exc}); the "
+                      "pack is settled again next time", PackCacheWarning, stacklevel=3)
+        if tmp is not None:
+            Path(tmp).unlink(missing_ok=True)
+    except BaseException:   # an interrupt: leave no temporary file behind
+        if tmp is not None:
+            Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def build_assembly(width_m: float, height_m: float, *, radius_min_m: float = 12.5,

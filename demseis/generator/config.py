@@ -70,7 +70,7 @@ def _section_class(table: str, cls_name: str, doc: str) -> type:
 
 ModelSection = _section_class("model", "ModelSection", """The DEM box and run control; fixed for a
 whole sweep: ``width_m``, ``height_m``, ``radius_min_m``, ``radius_max_m``, ``n_snapshots``,
-``sedimentation``, ``wall_speed_m_s``.""")
+``sedimentation``, ``wall_speed_m_s``, ``engine``, ``pack_library``.""")
 GridSection = _section_class("grid", "GridSection", """The raster grid (``cell_m``); fixed for a
 sweep because every sample shares one (H, W) shape.""")
 OutputSection = _section_class("output", "OutputSection", """Optional arrays and the output domain:
@@ -141,7 +141,7 @@ class Config:
                 "renders_per_snapshot": self.sweep.renders_per_snapshot,
                 **{k: s.to_json() for k, s in self.sweep.params.items()},
             },
-            "model": dataclasses.asdict(self.model),
+            "model": self._model_dict(),
             "grid": dataclasses.asdict(self.grid),
             "output": dataclasses.asdict(self.output),
             "labels": dataclasses.asdict(self.labels),
@@ -150,6 +150,16 @@ class Config:
             # only when set: a config without plug-ins keeps the dict (and store) it had
             **({"plugins": list(self.plugins)} if self.plugins else {}),
         }
+
+
+    def _model_dict(self) -> dict[str, Any]:
+        """``[model]`` as a dict; ``pack_library`` only where it is set and the engine takes
+        packs (``packs`` attribute): a config that settles every run, or whose engine has no
+        packs, keeps the dict (and store bytes) it had before the pack library existed."""
+        out = dataclasses.asdict(self.model)
+        if not out["pack_library"] or not getattr(ENGINES.get(self.model.engine), "packs", False):
+            del out["pack_library"]
+        return out
 
 
 def _cross(specs: dict[str, Spec]) -> list[dict[str, Any]]:

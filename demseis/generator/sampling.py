@@ -11,6 +11,8 @@ Seed tree (spawn keys under the sweep seed; the second key is one of the named c
     (run, SEED_FAULTS)               placement of a fault system (``structure != "single"``)
     (run, SEED_STRATA)               the beds of the ``strata`` rendering
     (run, SEED_POPULATION)           the kinematic engine's fault population (``base_stretch``)
+    (run, SEED_PACK)                 the order in which runs run .. run + K - 1 take the K packs
+                                     of ``[model] pack_library`` (run a multiple of K)
 
 A run's values depend only on the sweep seed and the run index, never on worker count or order.
 """
@@ -36,6 +38,7 @@ SEED_LAYERS = 4
 SEED_FAULTS = 6
 SEED_STRATA = 7
 SEED_POPULATION = 8
+SEED_PACK = 9
 
 
 def seed_sequence(cfg: Config, *key: int) -> np.random.SeedSequence:

@@ -102,6 +102,9 @@ class Engine(Protocol):
     strata : (optional, default False) whether its states carry ``reference`` and ``strata``,
         which ``[output] rendering = "strata"`` (the default) needs; a config asking for it
         from an engine without is refused at load.
+    packs : (optional, default False) whether its runs take their settled pack from the
+        library of ``[model] pack_library`` packs; an engine without ignores the key (and a
+        store's config does not record it).
     """
 
     particles: bool

@@ -6,6 +6,10 @@ properties per element, rasterised to the grid (:mod:`demseis.seismic`), and the
 the element displacements (:func:`demseis.labels.label_maps`). For the ``strata`` rendering a
 state also carries the reference map of its snapshot (:func:`demseis.dem.reference_map`) and
 the run's beds (:func:`dem_strata`).
+
+With ``[model] pack_library = K > 0`` a run does not settle its own pack: it takes one of K
+settled packs (:func:`run_pack`), each settled once and cached on disk (:func:`pack_cache_dir`),
+and layers, faults and deposits it with its own draws.
 """
 
 from __future__ import annotations
@@ -13,26 +17,29 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import os
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from functools import partial
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from demseis.errors import ConfigError, SimulationError
-from demseis.dem import NormalFault, build_assembly, simulate, time_step
+from demseis.dem import Material, NormalFault, Pack, build_assembly, settle_pack, simulate, time_step
 from demseis.dem.reference import reference_map
 from demseis.dem.strata import layer_materials
 from demseis.generator.config import Config
 from demseis.generator.engines import EngineRun, State
 from demseis.generator.layout import grid_of
-from demseis.generator.params import spec_values_hint
+from demseis.generator.params import DistSpec, Fixed, spec_values_hint
 from demseis.generator.physics import check_physics
 from demseis.generator.runsetup import (RunInfo, fault_system_of, layer_thicknesses, material_of,
                                         property_model_of, run_info, run_properties, run_strata)
-from demseis.generator.sampling import SEED_DEM, SEED_LAYERS, SEED_PROPERTIES, RunSpec, rng_at
+from demseis.generator.sampling import (SEED_DEM, SEED_LAYERS, SEED_PACK, SEED_PROPERTIES,
+                                        RunSpec, rng_at)
 from demseis.labels import displacement_history, label_maps, strain_history
-from demseis.parameters import PARAMS
+from demseis.parameters import MATERIAL_FIELDS, PARAMS
 from demseis.registry import LABEL_METHODS, RENDERINGS
 from demseis.seismic import (LayerProperties, Strata, draw_layer_properties, element_properties,
                              property_grids)
@@ -43,6 +50,8 @@ from demseis.types import Snapshot
 DRY_RUN_ELEMENT_STEPS_PER_S = 2.0e7
 DRY_RUN_SETTLE_S_PER_ELEMENT = 1.4e-3
 DRY_RUN_PACKING = 0.86
+#: environment variable naming the pack library's directory (:func:`pack_cache_dir`)
+PACK_CACHE_ENV = "DEMSEIS_PACK_CACHE"
 #: reruns of a run that went unstable; try k runs the basement at ``wall_speed_m_s / 2**k``
 #: (closer to quasi-static; the tries after the first take 2, 4, ... times the steps)
 STABILISED_TRIES = 2
@@ -53,6 +62,8 @@ class DemEngine:
 
     particles = True
     strata = True
+    #: runs can take their settled pack from a library (``[model] pack_library``)
+    packs = True
 
     def check(self, cfg: Config) -> None:
         """Elements fit the box and the layers, and the DEM's physical sanity rules
@@ -121,6 +132,7 @@ class DemEngine:
             cfg.model.width_m, cfg.model.height_m,
             radius_min_m=cfg.model.radius_min_m, radius_max_m=cfg.model.radius_max_m,
             n_layers=int(p["n_layers"]), layer_thickness_m=thick, material=material, rng=rng,
+            pack=run_pack(cfg, spec.run) if cfg.model.pack_library else None,
         )
         layers = None
         if float(p["strength_contrast"]) > 1.0:
@@ -188,6 +200,66 @@ class DemEngine:
                                                             grid.top_m)
             yield State(snapshot=k, vp_m_s=vp_g, rho_kg_m3=rho_g, labels=labels, values=values,
                         reference=reference, strata=strata)
+
+
+def pack_cache_dir() -> Path:
+    """The pack library's directory: ``$DEMSEIS_PACK_CACHE`` when set, else
+    ``$XDG_CACHE_HOME/demseis/packs`` (``~/.cache/demseis/packs``). Packs are named by a hash
+    of what they are settled from, so stores and sweeps of the same box share them; the
+    directory only saves time (deleting it costs one settling per pack, never other bytes)."""
+    env = os.environ.get(PACK_CACHE_ENV, "").strip()
+    if env:
+        return Path(env).expanduser()
+    base = os.environ.get("XDG_CACHE_HOME", "").strip() or os.path.join("~", ".cache")
+    return Path(base).expanduser() / "demseis" / "packs"
+
+
+def pack_index(cfg: Config, run: int) -> int:
+    """Which of the ``K = [model] pack_library`` packs run ``run`` takes: each block of K
+    consecutive runs (``b K .. b K + K - 1``) takes every pack once, in an order drawn from the
+    seed node ``(b K, SEED_PACK)``; so a run's pack depends only on the sweep seed and its
+    index, and the packs are used equally."""
+    k = cfg.model.pack_library
+    if k < 1:
+        raise ConfigError(f"model.pack_library = {k}: a run takes a library pack only when it "
+                          "is >= 1")
+    first = run - run % k
+    return int(rng_at(cfg, first, SEED_PACK).permutation(k)[run % k])
+
+
+def library_material(cfg: Config) -> Material:
+    """The material every pack of the library is settled with: each material parameter's
+    value where the sweep fixes it, else the middle of what it draws (uniform: the midpoint,
+    log-uniform: the geometric midpoint, truncated normal: its mean, a list or choice: the
+    first value). Each run then relaxes the pack with its own material before faulting
+    (:func:`demseis.dem.simulate`)."""
+    values = {}
+    for name, key in MATERIAL_FIELDS.items():
+        spec = cfg.sweep.params[key]
+        if isinstance(spec, Fixed):
+            v = spec.value
+        elif isinstance(spec, DistSpec) and spec.dist == "uniform":
+            v = 0.5 * (spec.low + spec.high)
+        elif isinstance(spec, DistSpec) and spec.dist == "loguniform":
+            v = math.sqrt(spec.low * spec.high)
+        elif isinstance(spec, DistSpec) and spec.dist == "truncnormal":
+            v = spec.mean
+        else:
+            v = spec.values[0]
+        values[name] = PARAMS[key].kind(v)
+    return Material(**values)
+
+
+def run_pack(cfg: Config, run: int, cache_dir: str | os.PathLike | None = None) -> Pack:
+    """The settled pack of run ``run`` from the library of ``[model] pack_library`` packs:
+    pack k (:func:`pack_index`) is :func:`demseis.dem.settle_pack` of the model box and radii
+    with :func:`library_material` and seed k, loaded from ``cache_dir`` (default
+    :func:`pack_cache_dir`) or settled once and written there (checksummed, atomically)."""
+    m = cfg.model
+    return settle_pack(m.width_m, m.height_m, radius_min_m=m.radius_min_m,
+                       radius_max_m=m.radius_max_m, material=library_material(cfg),
+                       rng=pack_index(cfg, run),
+                       cache_dir=pack_cache_dir() if cache_dir is None else cache_dir)
 
 
 def _try_name(attempt: int, speed_m_s: float) -> str:
