@@ -363,6 +363,12 @@ class ArrayMeta:
         sep = self.key_separator
         return "c" + "".join(sep + str(int(c)) for c in coords) if coords else "c"
 
+    def block_file(self, store: str | Path, index: int) -> Path:
+        """The chunk (or shard) file number ``index`` along the first axis, in the store at
+        ``store`` (every demseis array has one chunk across its other axes)."""
+        coords = (int(index),) + (0,) * (len(self.shape) - 1)
+        return Path(store, *self.path.split("/"), *self.chunk_key(coords).split("/"))
+
 
 @dataclass(frozen=True)
 class ChunkEncoder:
@@ -601,6 +607,4 @@ def write_block(store: str | Path, meta: ArrayMeta, index: int, block: np.ndarra
     outer = meta.shards or meta.chunks
     if any(c < s for c, s in zip(outer[1:], meta.shape[1:])):
         raise ValueError(f"{meta.path}: more than one chunk across the non-leading axes")
-    coords = (int(index),) + (0,) * (len(meta.shape) - 1)
-    key = f"{meta.path}/{meta.chunk_key(coords)}"
-    put_file(Path(store, *key.split("/")), encode_block(meta, block, write_empty=write_empty))
+    put_file(meta.block_file(store, index), encode_block(meta, block, write_empty=write_empty))

@@ -62,10 +62,6 @@ def chunk_identity(f: Path) -> tuple[int, int] | None:
         return None
 
 
-def _table_file(path: Path, k: int) -> Path:
-    return path / "params" / f"c.{k}.0"
-
-
 @dataclass
 class IndexBlock:
     """One block of the index as read: the records of its shards and their identities.
@@ -88,16 +84,11 @@ def read_block(path: Path, metas: Mapping[str, ArrayMeta], b: int) -> IndexBlock
     it)."""
     rec_meta, id_meta = metas["params_index"], metas["params_index_files"]
     try:
-        ids = id_meta.encoder.decode(_chunk_bytes(path, id_meta, b), id_meta.chunks)
-        rows = rec_meta.encoder.decode(_chunk_bytes(path, rec_meta, b), rec_meta.chunks)
+        ids = id_meta.encoder.decode(id_meta.block_file(path, b).read_bytes(), id_meta.chunks)
+        rows = rec_meta.encoder.decode(rec_meta.block_file(path, b).read_bytes(), rec_meta.chunks)
     except (FileNotFoundError, ValueError):
         return None
     return IndexBlock(b, rows, ids)
-
-
-def _chunk_bytes(path: Path, meta: ArrayMeta, b: int) -> bytes:
-    coords = (b,) + (0,) * (len(meta.shape) - 1)
-    return path.joinpath(*meta.path.split("/"), *meta.chunk_key(coords).split("/")).read_bytes()
 
 
 def indexed_rows(path: Path, metas: Mapping[str, ArrayMeta], shards: np.ndarray,
@@ -107,7 +98,7 @@ def indexed_rows(path: Path, metas: Mapping[str, ArrayMeta], shards: np.ndarray,
     out: dict[int, np.ndarray] = {}
     if not all(n in metas for n in INDEX_ARRAYS) or not len(shards):
         return out
-    per = metas["params_index_files"].chunks[0]
+    per, table = metas["params_index_files"].chunks[0], metas["params"]
     for b in np.unique(shards // per).tolist():
         blk = read_block(path, metas, b)
         if blk is None:
@@ -115,7 +106,7 @@ def indexed_rows(path: Path, metas: Mapping[str, ArrayMeta], shards: np.ndarray,
         for k in shards[(shards // per) == b].tolist():
             j = k - b * per
             held = tuple(int(v) for v in blk.files[j])
-            if any(held) and chunk_identity(_table_file(path, k)) == held:
+            if any(held) and chunk_identity(table.block_file(path, k)) == held:
                 out[k] = blk.records[j * s:(j + 1) * s]
     return out
 
@@ -147,7 +138,7 @@ def update_index(path: str | Path, done: np.ndarray | None = None,
             dtype=np.int64)
         done, _ = read_done_flags(path, layout.n_shards, shards=wanted)
     done_set = set(np.flatnonzero(np.asarray(done) == 1).tolist())
-    on_disk = _written_blocks(path, id_meta)
+    on_disk = written_blocks(path, id_meta)
     changed = 0
     for b in blocks:
         shards_b = range(b * per, min((b + 1) * per, layout.n_shards))
@@ -160,7 +151,7 @@ def update_index(path: str | Path, done: np.ndarray | None = None,
         for k in shards_b:
             j = k - b * per
             held = tuple(int(v) for v in blk.files[j])
-            ident = chunk_identity(_table_file(path, k)) if k in done_set else None
+            ident = chunk_identity(table.block_file(path, k)) if k in done_set else None
             if ident is not None and held == ident:
                 continue
             if ident is None and not any(held):
@@ -182,7 +173,7 @@ def update_index(path: str | Path, done: np.ndarray | None = None,
     return changed
 
 
-def _written_blocks(path: Path, meta: ArrayMeta) -> set[int]:
+def written_blocks(path: Path, meta: ArrayMeta) -> set[int]:
     """Blocks of the index whose identity chunk file (``c.<block>.0``) exists."""
     try:
         names = os.listdir(path.joinpath(*meta.path.split("/")))

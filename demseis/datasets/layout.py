@@ -62,7 +62,7 @@ NOT_SAMPLE_ARRAYS = ("shard_done", "depth", "twt", "x", "params", "params_index"
                      "params_index_files")
 
 
-def _root_metadata(path: Path) -> dict | None:
+def root_metadata(path: Path) -> dict | None:
     """Parsed ``zarr.json`` of ``path`` or None if there is none / it is not JSON."""
     meta = path / "zarr.json"
     if not meta.is_file():
@@ -77,7 +77,7 @@ def root_metadata_lost(path: Path) -> bool:
     """True when the root ``zarr.json`` of ``path`` is missing or unreadable while the store's
     ``shard_done`` array is intact: a demseis store whose root document was damaged (which
     :func:`~demseis.datasets.create.create_store` rewrites on resume)."""
-    if _root_metadata(path) is not None:
+    if root_metadata(path) is not None:
         return False
     try:
         meta = json.loads((path / "shard_done" / "zarr.json").read_bytes())
@@ -88,7 +88,7 @@ def root_metadata_lost(path: Path) -> bool:
 
 def is_demseis_store(path: Path) -> bool:
     """True when ``path`` holds the root group of a demseis store (of any schema version)."""
-    meta = _root_metadata(path)
+    meta = root_metadata(path)
     return bool(
         meta
         and meta.get("node_type") == "group"
@@ -103,7 +103,7 @@ def check_store_metadata(path: Path) -> dict:
         raise StoreError(f"store {str(path)!r} does not exist")
     if not path.is_dir():
         raise StoreError(f"store {str(path)!r} is a file, not a Zarr store directory")
-    meta = _root_metadata(path)
+    meta = root_metadata(path)
     if meta is None:
         raise StoreError(f"{str(path)!r} is not a Zarr store (no readable zarr.json)")
     if meta.get("zarr_format") != 3 or meta.get("node_type") != "group":

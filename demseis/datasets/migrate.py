@@ -34,6 +34,7 @@ from demseis.datasets.layout import (
     SCHEMA_VERSION,
     array_metas,
     layout_of,
+    root_metadata,
 )
 from demseis.datasets.lock import writer_lock
 from demseis.datasets.records import pack
@@ -85,10 +86,11 @@ def _count_files(path: Path) -> int:
 
 
 def _root(path: Path) -> dict:
+    """The parsed root ``zarr.json`` of the demseis store at ``path``."""
+    meta = root_metadata(path)
     try:
-        meta = json.loads((path / "zarr.json").read_bytes())
         meta["attributes"]["demseis"]["schema_version"]
-    except (OSError, ValueError, KeyError, TypeError):
+    except (KeyError, TypeError):
         raise StoreError(f"{str(path)!r} is not a demseis store (no readable root zarr.json "
                          "with a schema version)") from None
     return meta
@@ -157,8 +159,7 @@ def _migrate_v2(path: Path, report: MigrateReport, progress: bool) -> None:
         try:
             for c in columns:
                 meta = members[f"params/{c.name}"]
-                f = path.joinpath(*meta.path.split("/"), *meta.chunk_key((k,)).split("/"))
-                values[c.name] = meta.encoder.decode(f.read_bytes(), (s,))
+                values[c.name] = meta.encoder.decode(meta.block_file(path, k).read_bytes(), (s,))
         except (OSError, ValueError):
             report.pending.append(k)
             continue

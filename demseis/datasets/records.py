@@ -4,7 +4,7 @@ Every per-sample parameter of a store lives in one array, ``params`` (N, R) uint
 holds the parameters of sample ``i`` packed as one little-endian record of R bytes, the
 columns in name order without padding. Its chunks are (S, R), one file per shard, so a run's
 parameters cost one file whatever their number (one array per parameter cost one file each:
-96 per run for the generator's parameters). The record layout is in the array's attributes::
+117 per run for the generator's parameters). The record layout is in the array's attributes::
 
     "demseis": {"role": "params", "columns": [
         {"name": "dip_deg", "dtype": "<f4", "units": "deg", "long_name": "dip deg"},
@@ -137,7 +137,6 @@ def read_table_chunk(path: Path, meta: ArrayMeta, k: int, s: int) -> tuple[np.nd
     """The (S, R) records of shard ``k`` from its table chunk file, its crc32c checked, and the
     identity of the bytes read (size, crc32c: :func:`demseis.datasets.index.chunk_identity`);
     ``FileNotFoundError`` or ``ValueError`` (damaged)."""
-    f = path.joinpath(*meta.path.split("/"), *meta.chunk_key((k, 0)).split("/"))
-    data = f.read_bytes()
+    data = meta.block_file(path, k).read_bytes()
     ident = (len(data), int.from_bytes(data[-4:], "little") if len(data) >= 4 else -1)
     return meta.encoder.decode(data, (s, meta.shape[1])), ident

@@ -82,7 +82,7 @@ def read_shard_records(path: Path, table: ArrayMeta, shard: int, s: int,
     is missing or damaged."""
     s0 = shard * s
     which = f"sample {sample}" if sample is not None else f"samples {s0}..{s0 + s - 1}"
-    f = path.joinpath(*table.path.split("/"), *table.chunk_key((shard, 0)).split("/"))
+    f = table.block_file(path, shard)
     what = f"parameters of {which} in {str(path)!r}"
     try:
         return read_table_chunk(path, table, shard, s)[0]

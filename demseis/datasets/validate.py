@@ -9,7 +9,6 @@ so it takes no writer lock and may run while a sweep writes (it checks the shard
 
 from __future__ import annotations
 
-import os
 import sys
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
@@ -20,7 +19,7 @@ import numpy as np
 
 from tqdm import tqdm
 
-from demseis.datasets.index import INDEX_ARRAYS, indexed_rows
+from demseis.datasets.index import INDEX_ARRAYS, indexed_rows, written_blocks
 from demseis.datasets._shardio import check_chunk_file
 from demseis.datasets.integrity import read_done_flags, shard_damage
 from demseis.datasets.layout import (
@@ -160,12 +159,11 @@ def _index_problems(path: Path, layout: StoreLayout, metas: dict,
     if not layout.table or not all(n in metas for n in INDEX_ARRAYS):
         return []
     out = []
-    base = path / "params_index_files"
-    for name in sorted(n for n in (os.listdir(base) if base.is_dir() else ()) if n.startswith("c.")):
+    for b in sorted(written_blocks(path, metas["params_index_files"])):
         for arr in INDEX_ARRAYS:
-            problem = check_chunk_file(path / arr / name)
+            problem = check_chunk_file(metas[arr].block_file(path, b))
             if problem:
-                out.append(f"index block {name.split('.')[1]}: {arr} is damaged ({problem}); "
+                out.append(f"index block {b}: {arr} is damaged ({problem}); "
                            f"`demseis migrate {path}` rebuilds the index")
     shards = np.array(sorted(records), dtype=np.int64)
     held = indexed_rows(path, metas, shards, layout.samples_per_shard)
