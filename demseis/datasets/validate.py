@@ -258,7 +258,7 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
     for k in tqdm(done_shards.tolist(), desc="validate", unit="shard", disable=not progress,
                   file=sys.stderr):
         sel = layout.shard_slice(k)
-        damage = shard_damage(path, k, group, layout)  # checksums: names every damaged sample
+        damage = shard_damage(path, k, group, layout, metas)  # names every damaged sample
         problems.extend(damage)
         for name, values in _intact(group, layout.arrays, "", k, sel, damage, problems):
             problems.extend(_check_array(layout.specs[name], values, k, sel.start))
