@@ -245,13 +245,15 @@ def metadata_problems(path: str | Path) -> list[str]:
     group and array directory must hold a ``zarr.json`` that parses as JSON, is a Zarr v3 group
     or array, and (for an array) has metadata the direct writer understands (data type, shape,
     chunk grid, codecs). Chunk directories (``c/``) are not entered, so the cost is that of the
-    metadata files, whatever the number of chunks."""
+    metadata files, whatever the number of chunks. Hidden directories (a name starting with
+    ``.``) are a writer's scratch, not part of the store: a particle group being built, or
+    ``demseis migrate``'s staging; they are not entered either."""
     path = Path(path)
     out: list[str] = []
     for top, dirs, _files in os.walk(path):
         here = Path(top)
         rel = here.relative_to(path).as_posix()
-        dirs[:] = sorted(d for d in dirs if d != "c")
+        dirs[:] = sorted(d for d in dirs if d != "c" and not d.startswith("."))
         if rel == ".":
             continue
         meta_file = here / "zarr.json"

@@ -104,15 +104,26 @@ def write_particles(path: str | Path, run_id: int, snapshots: Sequence[Snapshot]
         create_arrays(store, specs)
 
     files = zarr_files(build)
-    if (path / name).exists():  # the group is replaced, as by zarr's overwrite=True
-        shutil.rmtree(path / name)
-    put_files(path / name, files)
+    # The group is built under a hidden name beside its place and renamed into it, so a writer
+    # killed at any moment leaves the old group, the new one or none, and a hidden scratch
+    # directory that the next write of this run removes (readers and validate skip hidden
+    # names). Only the shard task of the run writes it, so the names cannot collide.
+    final = path / name
+    staging, old = final.with_name(f".{final.name}.partial"), final.with_name(f".{final.name}.old")
+    for scratch in (staging, old):
+        shutil.rmtree(scratch, ignore_errors=True)
+    put_files(staging, files)
     for k in PARTICLE_FIELDS:
         if values[k].shape[0]:  # an empty array has no chunk
-            meta = array_meta(path, f"{name}/{k}", json.loads(files[f"{k}/zarr.json"]))
+            rel = staging.relative_to(path).as_posix()
+            meta = array_meta(path, f"{rel}/{k}", json.loads(files[f"{k}/zarr.json"]))
             # every chunk is written, also one of zeros (zarr's write_empty_chunks): a missing
             # file means damage
             write_block(path, meta, 0, values[k], write_empty=True)
+    if final.exists():  # the group is replaced, as by zarr's overwrite=True
+        final.rename(old)
+    staging.rename(final)
+    shutil.rmtree(old, ignore_errors=True)
 
 
 def read_particles(path: str | Path, run_id: int) -> list[Snapshot]:

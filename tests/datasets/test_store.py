@@ -254,6 +254,40 @@ def test_read_particles_missing_run(tmp_path):
         read_particles(path, 1)
 
 
+def test_a_particle_group_is_replaced_whole_and_scratch_of_a_killed_writer_is_harmless(tmp_path):
+    """Shard 1's writer was killed while it replaced its run's particles (between the two
+    renames), shard 2's just after it made a directory of its new group: no group for run 1, its
+    new group under one hidden name and the old under another, run 2's half begun. The store
+    validates and opens, readers see run 1 absent (not half written), and the resumed shards
+    clear the scratch."""
+    import shutil
+
+    from demseis.datasets import validate_store
+    from demseis.datasets.xarray_io import to_xarray
+
+    path = make_store(tmp_path / "s.zarr", n_shards=3, write=[0])
+    write.write_particles(path, 1, shard_data(1, 6, (24, 32))[2])  # an earlier attempt
+    final = path / "particles" / "run_00001"
+    shutil.copytree(final, final.with_name(".run_00001.partial"))
+    final.rename(final.with_name(".run_00001.old"))
+    (path / "particles" / ".run_00002.partial" / "ids").mkdir(parents=True)
+    assert shard_status(path).tolist() == [1, 0, 0]
+    with pytest.raises(StoreError, match="no particle snapshots for run 1"):
+        read_particles(path, 1)
+    report = validate_store(path)
+    assert report.ok and report.n_done == 1, report.problems
+    to_xarray(path)
+    expected = {k: shard_data(k, 6, (24, 32)) for k in (1, 2)}
+    for k, data in expected.items():
+        write_shard(path, k, *data)
+    assert sorted(p.name for p in (path / "particles").iterdir()) == [
+        "run_00000", "run_00001", "run_00002", "zarr.json"]
+    for k, data in expected.items():
+        np.testing.assert_array_equal(read_particles(path, k)[-1].xy, data[2][-1].xy)
+    report = validate_store(path)
+    assert report.ok and report.n_done == 3, report.problems
+
+
 def test_layer_minus_one_means_no_rock_and_is_valid(tmp_path):
     path = make_store(tmp_path / "s.zarr", n_shards=1, write=[])
     d, p, parts = shard_data(0, 6, (24, 32))

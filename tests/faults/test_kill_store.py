@@ -27,11 +27,13 @@ S = 6
 
 CHILD = """
 import sys, time
+import demseis.datasets.particles as particles
 import demseis.datasets.write as write
 from tests.datasets._helpers import shard_data
 
 path, stop = sys.argv[1], sys.argv[2]
 real_write, real_particles = write._write_array, write.write_particles
+real_block = particles.write_block
 calls = []
 
 def announce_and_wait(written=()):
@@ -50,8 +52,15 @@ def write_particles(*a, **k):
     if stop == "before-done-flag":
         announce_and_wait()
 
+def write_particle_block(*a, **k):
+    real_block(*a, **k)
+    calls.append("particles")
+    if stop == "mid-particles" and calls.count("particles") == 2:  # two of its ten arrays
+        announce_and_wait()
+
 write._write_array = write_array
 write.write_particles = write_particles
+particles.write_block = write_particle_block
 write.write_shard(path, 2, *shard_data(2, {S}, {SHAPE}))
 print("FINISHED", flush=True)
 """
@@ -78,7 +87,7 @@ def _check_resumed(path: Path, n_shards: int, s: int, shape) -> None:
         np.testing.assert_array_equal(read_particles(path, k)[-1].xy, parts[-1].xy)
 
 
-@pytest.mark.parametrize("stop", ["mid-arrays", "before-done-flag"])
+@pytest.mark.parametrize("stop", ["mid-arrays", "mid-particles", "before-done-flag"])
 def test_kill_9_mid_shard_then_resume(tmp_path, stop):
     path = make_store(tmp_path / "s.zarr", n_shards=4, s=S, shape=SHAPE, write=[0, 1])
     child = _spawn([str(path), stop], textwrap.dedent(CHILD.format(S=S, SHAPE=SHAPE)))
@@ -95,6 +104,9 @@ def test_kill_9_mid_shard_then_resume(tmp_path, stop):
     assert shard_status(path).tolist() == [1, 1, 0, 0]
     g = open_store(path, "r+")
     assert len(written) == (3 if stop == "mid-arrays" else 0)
+    if stop == "mid-particles":  # run 2's group was being built under a hidden name
+        assert not (path / "particles" / "run_00002").exists()
+        assert (path / "particles" / ".run_00002.partial" / "zarr.json").is_file()
     data, _, _ = shard_data(2, S, SHAPE)
     for name in written:  # the child did write these sample arrays of shard 2
         np.testing.assert_array_equal(g[name][2 * S:3 * S], data[name])
