@@ -45,9 +45,9 @@ def capture(preset: str, config: str | None, run: int, call: int) -> list:
     import numpy as np
 
     import demseis.dem._kernels as K
-    from demseis.generator.config import load_config
+    from demseis.generator.config.sampling import plan_run
+    from demseis.generator.config.settings import load_config
     from demseis.generator.engines import get_engine
-    from demseis.generator.sampling import plan_run
 
     cfg = load_config(config, preset=preset)
     orig, seen, state = K.run_steps, [0], []

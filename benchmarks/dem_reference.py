@@ -24,12 +24,8 @@ import time
 import numpy as np
 
 from demseis.dem import element_maps, reference_coordinates
-from demseis.diagnostics.toys import (
-    disk_pack,
-    down_dip_vector,
-    fault_signed_distance,
-    kinematic_fault,
-)
+from demseis.diagnostics.toys import (disk_pack, down_dip_vector, fault_signed_distance,
+                                      kinematic_fault)
 from demseis.labels import displacement_history
 
 
@@ -54,9 +50,9 @@ def _timed(ref, cur, r, pts, repeat, group=None):
 
 
 def quick_dem(repeat):
-    from demseis.generator.config import load_config
+    from demseis.generator.config.sampling import plan_run
+    from demseis.generator.config.settings import load_config
     from demseis.generator.engines import get_engine
-    from demseis.generator.sampling import plan_run
 
     cfg = load_config(None, preset="quick")
     snaps = list(get_engine("dem").simulate(cfg, plan_run(cfg, 0)).snapshots)

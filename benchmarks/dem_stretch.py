@@ -23,9 +23,9 @@ import time
 
 import numpy as np
 
-from demseis.generator.config import load_config, parse_config
+from demseis.generator.config.sampling import plan_run
+from demseis.generator.config.settings import load_config, parse_config
 from demseis.generator.engines import get_engine
-from demseis.generator.sampling import plan_run
 
 
 def _value(text: str):

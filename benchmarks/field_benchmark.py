@@ -78,9 +78,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _field_common import (  # noqa: E402  (benchmarks/ is on sys.path)
-    add_training_args, budget, load_results, machine, read_field, read_pair,
-    read_section, resize, save_results, score_stack)
+from _field_common import (add_training_args, budget,  # noqa: E402  (benchmarks/ is on sys.path)
+                           load_results, machine, read_field, read_pair, read_section, resize,
+                           save_results, score_stack)
 
 #: The controls built in the run: name -> (preset, overrides layered on it as a TOML file
 #: beside ``--preset`` would be; ``[sweep] n_runs`` comes from the command line).
@@ -119,7 +119,7 @@ def build_store(name: str, preset: str, overrides: dict, cache: Path, workers: i
     import tomllib
 
     import demseis
-    from demseis.generator.config import _merge, parse_config, preset_path
+    from demseis.generator.config.settings import _merge, parse_config, preset_path
 
     raw = _merge(tomllib.loads(preset_path(preset).read_text()), overrides)
     out = cache / "stores" / f"{name}-{digest(raw)}.zarr"

@@ -28,9 +28,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--runs", type=int, help="n_runs (default: the preset's)")
     args = ap.parse_args(argv)
 
-    from demseis.generator.config import load_config
-    from demseis.generator.pipeline import run_shard
-    from demseis.generator.sweep import run_sweep
+    from demseis.generator.config.settings import load_config
+    from demseis.generator.sweep.driver import run_sweep
+    from demseis.generator.sweep.pipeline import run_shard
 
     base = load_config(preset="quick")
     if args.runs:

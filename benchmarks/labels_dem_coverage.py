@@ -39,9 +39,9 @@ def _snapshots(preset: str, run: int, cache: str | None):
     if path and os.path.exists(path):
         with open(path, "rb") as fh:
             return pickle.load(fh)
-    from demseis.generator.config import load_config
+    from demseis.generator.config.sampling import plan_run
+    from demseis.generator.config.settings import load_config
     from demseis.generator.engines import get_engine
-    from demseis.generator.sampling import plan_run
 
     cfg = load_config(None, preset=preset)
     snaps = list(get_engine("dem").simulate(cfg, plan_run(cfg, run)).snapshots)
@@ -103,11 +103,11 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
             metric: str = "euclidean", sets: dict | None = None) -> dict:
     """Coverage, rungs, loops, slip floor and label_maps time of one DEM run."""
 
-    from demseis.generator.config import load_config
-    from demseis.generator.layout import grid_of
-    from demseis.labels import label_maps, strain_history
     from demseis.diagnostics.coverage import jump_coverage, jump_field
-    from demseis.labels import displacement_history, loop_count, rung_fraction
+    from demseis.generator.config.layout import grid_of
+    from demseis.generator.config.settings import load_config
+    from demseis.labels import (displacement_history, label_maps, loop_count, rung_fraction,
+                                strain_history)
 
     cfg = load_config(None, preset=preset)
     grid = grid_of(cfg)
@@ -155,10 +155,9 @@ def ab_timing(preset: str, run: int, cache: str | None, repeats: int = 3) -> dic
     the same machine load; medians and their ratios."""
     import dataclasses
 
-    from demseis.generator.config import load_config
-    from demseis.generator.layout import grid_of
-    from demseis.labels import label_maps, strain_history
-    from demseis.labels import displacement_history
+    from demseis.generator.config.layout import grid_of
+    from demseis.generator.config.settings import load_config
+    from demseis.labels import displacement_history, label_maps, strain_history
 
     cfg = load_config(None, preset=preset)
     grid = grid_of(cfg)
@@ -187,10 +186,9 @@ def ab_timing(preset: str, run: int, cache: str | None, repeats: int = 3) -> dic
 def kinematic(metric: str = "euclidean") -> dict:
     """Coverage of the labels (fault mask and fault core) and of the true plane on the planar
     kinematic faults."""
-    from demseis.labels import LabelConfig, label_maps, strain_history
     from demseis.diagnostics.coverage import jump_coverage, jump_field
-    from demseis.labels import displacement_history
     from demseis.diagnostics.toys import disk_pack, fault_signed_distance, kinematic_fault
+    from demseis.labels import LabelConfig, displacement_history, label_maps, strain_history
     from demseis.types import Grid, Snapshot
 
     width, height, cell = 2000.0, 1000.0, 10.0

@@ -25,9 +25,9 @@ def _snapshots(path: str | None):
     if path:
         with open(path, "rb") as fh:
             return pickle.load(fh)
-    from demseis.generator.config import load_config
+    from demseis.generator.config.sampling import plan_run
+    from demseis.generator.config.settings import load_config
     from demseis.generator.engines import get_engine
-    from demseis.generator.sampling import plan_run
 
     cfg = load_config(preset="seed")
     snaps = list(get_engine("dem").simulate(cfg, plan_run(cfg, 0)).snapshots)
@@ -48,18 +48,11 @@ def main() -> None:
     import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
 
-    from demseis.labels import LabelConfig, label_maps, strain_history
-    from demseis.labels import skeleton_length_cells
+    from demseis.labels import (LabelConfig, displacement_history, label_maps, loop_count,
+                                rung_fraction, skeleton_length_cells, strain_history)
+    from demseis.seismic import (PropertyModel, draw_layer_properties, element_properties,
+                                 property_grids, synthetic_sections)
     from demseis.types import Grid
-    from demseis.seismic import (
-        PropertyModel,
-        draw_layer_properties,
-        element_properties,
-        property_grids,
-        synthetic_sections,
-    )
-
-    from demseis.labels import displacement_history, loop_count, rung_fraction
 
     snaps = _snapshots(args.snapshots)
     if args.save_snapshots:

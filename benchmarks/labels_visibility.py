@@ -70,10 +70,10 @@ def state_reference_on_output(cfg, state, arrays_like, params
     """(y0, rock, samples-per-metre) of ``state`` (of a run with parameters ``params``) on the
     output grid (rows, traces): the reference elevation at every strata point taken to the
     time axis by linear interpolation (or the cell centres in depth)."""
-    from demseis.generator.layout import grid_of, time_axis_of
-    from demseis.generator.render import imaging_input, state_maps
-    from demseis.generator.survey import (fine_depths, labels_at_traces, reference_points,
-                                          substeps, trace_x)
+    from demseis.generator.config.layout import grid_of, time_axis_of, trace_x
+    from demseis.generator.render.section import imaging_input, state_maps
+    from demseis.generator.render.survey import (fine_depths, labels_at_traces, reference_points,
+                                                 substeps)
     from demseis.seismic.forward import depth_to_time
 
     grid = grid_of(cfg)
@@ -98,13 +98,14 @@ def state_reference_on_output(cfg, state, arrays_like, params
 
 def measure_store(path: str, runs: int | None, min_offset: float, tol: int) -> list[dict]:
     """Per-sample measures of the first ``runs`` done runs of ``path``."""
+    import zarr
+
     from demseis.datasets import read_particles
     from demseis.datasets.status import shard_status
-    from demseis.generator.config import stored_config
+    from demseis.generator.config.sampling import plan_run
+    from demseis.generator.config.settings import stored_config
     from demseis.generator.engines import get_engine, run_from_particles
-    from demseis.generator.render import renders_by_snapshot
-    from demseis.generator.sampling import plan_run
-    import zarr
+    from demseis.generator.render.section import renders_by_snapshot
 
     root = zarr.open_group(path, mode="r")
     cfg = stored_config(dict(root.attrs)["config"])

@@ -1,7 +1,7 @@
 """Seconds per DEM run with and without the pack library (``[model] pack_library``), by preset.
 
 For each preset that runs the DEM engine, runs ``--runs`` runs (0, 1, ...) of it in this
-process (no dask, no store writing) through :func:`demseis.generator.pipeline.run_shard`, once
+process (no dask, no store writing) through :func:`demseis.generator.sweep.pipeline.run_shard`, once
 with ``pack_library = 0`` (every run settles its own pack: the behaviour before the library)
 and once with ``pack_library = K`` from a warm library (its packs settled beforehand into a
 temporary ``DEMSEIS_PACK_CACHE``, timed separately), alternating run by run. Prints one JSON
@@ -38,9 +38,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--k", type=int, default=8, help="packs in the library")
     args = ap.parse_args(argv)
 
-    from demseis.generator.config import load_config
+    from demseis.generator.config.settings import load_config
     from demseis.generator.engines.dem import PACK_CACHE_ENV, pack_index, run_pack
-    from demseis.generator.pipeline import run_shard
+    from demseis.generator.sweep.pipeline import run_shard
 
     with tempfile.TemporaryDirectory() as cache:
         os.environ[PACK_CACHE_ENV] = cache

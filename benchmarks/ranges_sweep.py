@@ -22,8 +22,8 @@ and log-uniform over the top six decades when the lower bound is 0), uniform oth
 contact model uniformly among its choices. The draw is then
 
 1. ``refused``: the seed-scale config with these values (5 km x 2.77 km, 48 layers, 45 deg,
-   450 m, 3 snapshots) fails :func:`demseis.generator.config.parse_config` (its range and
-   physics checks, :mod:`demseis.generator.physics`), with the reason;
+   450 m, 3 snapshots) fails :func:`demseis.generator.config.settings.parse_config` (its range and
+   physics checks, :mod:`demseis.generator.engines.physics`), with the reason;
 2. ``too_costly``: accepted, but its time step makes a run more than ``--max-cost`` times as
    many steps as the default material's (steps ~ sqrt(Kn / density));
 3. run (until ``--runs`` draws have run): settle the pack with the material, fault it with
@@ -104,7 +104,7 @@ def draw(rng: np.random.Generator, ranges: str = "declared") -> dict:
 
 def check(values: dict) -> str | None:
     """The config's refusal message, or None if it accepts the draw."""
-    from demseis.generator.config import parse_config
+    from demseis.generator.config.settings import parse_config
 
     raw = {"sweep": {**values, "dip_deg": 45.0, "throw_m": 450.0, "n_layers": N_LAYERS},
            "model": {"width_m": W, "height_m": H, "n_snapshots": 3}}

@@ -31,7 +31,7 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 
 def _config(preset: str, path: str | None, n_runs: int):
-    from demseis.generator.config import load_config, parse_config
+    from demseis.generator.config.settings import load_config, parse_config
 
     raw = load_config(path, preset=preset).to_dict()
     raw["sweep"]["n_runs"] = n_runs
@@ -41,8 +41,8 @@ def _config(preset: str, path: str | None, n_runs: int):
 def _one(args: tuple[str, str | None, int, int]) -> dict:
     """Simulate run ``run``: its ``dem_attempt``, or the error of a run unstable on every try."""
     from demseis.errors import SimulationError
+    from demseis.generator.config.sampling import plan_run
     from demseis.generator.engines import get_engine
-    from demseis.generator.sampling import plan_run
 
     preset, path, n_runs, run = args
     cfg = _config(preset, path, n_runs)

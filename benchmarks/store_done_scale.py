@@ -61,9 +61,9 @@ def main() -> None:
     from demseis.datasets import FaultSegDataset, finalize_store, read_sample, write_shard
     from demseis.datasets.layout import SCHEMA_VERSION
     from demseis.datasets.read import read_params, store_summary
-    from demseis.generator.config import load_config, parse_config
-    from demseis.generator.faultinfo import fault_distribution
-    from demseis.generator.sweep import prepare_store, shard_task
+    from demseis.generator.config.settings import load_config, parse_config
+    from demseis.generator.sweep.driver import prepare_store, shard_task
+    from demseis.generator.sweep.faultinfo import fault_distribution
 
     sizes = sorted(int(v) for v in args.done.split(","))
     tmp = Path(tempfile.mkdtemp(prefix="demseis_done_", dir=args.dir))

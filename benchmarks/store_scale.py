@@ -56,9 +56,9 @@ def main() -> None:
     import demseis
     from demseis.datasets import FaultSegDataset, read_sample, shard_status
     from demseis.datasets.read import store_summary
-    from demseis.generator.config import load_config, parse_config
-    from demseis.generator.faultinfo import fault_distribution
-    from demseis.generator.sweep import prepare_store, shard_task
+    from demseis.generator.config.settings import load_config, parse_config
+    from demseis.generator.sweep.driver import prepare_store, shard_task
+    from demseis.generator.sweep.faultinfo import fault_distribution
 
     rows = []
     tmp = Path(tempfile.mkdtemp(prefix="demseis_scale_"))

@@ -53,9 +53,9 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
 
     from demseis.datasets import write_shard
-    from demseis.generator.config import load_config
-    from demseis.generator.pipeline import run_shard
-    from demseis.generator.sweep import prepare_store
+    from demseis.generator.config.settings import load_config
+    from demseis.generator.sweep.driver import prepare_store
+    from demseis.generator.sweep.pipeline import run_shard
 
     base = load_config(preset="quick")
     cfg = dataclasses.replace(base, model=dataclasses.replace(base.model, engine=args.engine))

@@ -21,11 +21,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from demseis.generator.config import load_config
+from demseis.generator.config.sampling import plan_run
+from demseis.generator.config.settings import load_config
 from demseis.generator.engines import get_engine
-from demseis.generator.render import render_run
-from demseis.generator.sampling import plan_run
-from demseis.generator.sweep import run_sweep
+from demseis.generator.render.section import render_run
+from demseis.generator.sweep.driver import run_sweep
 
 SURVEY = {"domain": "time", "dt_s": 0.004, "trace_spacing_m": 25.0}
 

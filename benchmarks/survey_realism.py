@@ -37,11 +37,11 @@ from demseis.evaluation.realism import (adjacent_trace_correlation, expected_lag
                                         horizon_roughness, intact_mask, offset_agreement,
                                         spectral_slope, zero_crossings)
 from demseis.evaluation.segyfile import read_segy_section
-from demseis.generator.config import load_config
+from demseis.generator.config.sampling import plan_run
+from demseis.generator.config.settings import load_config
 from demseis.generator.engines import get_engine
-from demseis.generator.render import imaging_input, labels_at_traces, state_maps
-from demseis.generator.sampling import plan_run
-from demseis.generator.sweep import run_sweep
+from demseis.generator.render.section import imaging_input, labels_at_traces, state_maps
+from demseis.generator.sweep.driver import run_sweep
 from demseis.seismic import interface_times
 
 FIELD = Path(__file__).resolve().parents[2] / "shared" / "field" / "f3_inline.sgy"

@@ -2,7 +2,7 @@
 
 Runs ``demseis.api.generate`` (the path of ``demseis generate``) alternately with 1 and 2
 LocalCluster workers (``--workers 1,2``) and with each worker start method of ``--methods``
-(``forkserver``, the default, and ``spawn``; see :mod:`demseis.generator.workers`),
+(``forkserver``, the default, and ``spawn``; see :mod:`demseis.generator.sweep.workers`),
 ``--repeats`` times each, into fresh stores, each sweep in a fresh Python process (the
 forkserver and the Numba kernels are not reused between sweeps). It reports medians of:
 samples/s end to end (``run_sweep``, cluster start-up included), for the whole process (its
@@ -36,7 +36,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from demseis.generator.config import load_config
+from demseis.generator.config.settings import load_config
 
 
 def _profile(s, workers: int) -> dict[str, float]:
@@ -67,8 +67,8 @@ def _timed_run(cfg_dict: dict, run: int, barrier) -> float:
     """Seconds of ``run_shard(run)`` in this process, after a warm-up run (Numba caches)."""
     import time
 
-    from demseis.generator.config import parse_config
-    from demseis.generator.pipeline import run_shard
+    from demseis.generator.config.settings import parse_config
+    from demseis.generator.sweep.pipeline import run_shard
 
     cfg = parse_config(cfg_dict)
     run_shard(cfg, run)

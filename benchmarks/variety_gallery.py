@@ -34,7 +34,7 @@ def main(argv=None) -> int:
     import zarr
 
     from demseis.datasets import read_params
-    from demseis.generator.layout import param_codes
+    from demseis.generator.config.layout import param_codes
     from demseis.parameters import MAX_BASEMENT_FAULTS
 
     codes = param_codes()

@@ -32,7 +32,7 @@ import numpy as np
 from demseis.datasets import FaultSegDataset, open_store, read_sample, store_layout, to_xarray
 from demseis.datasets.read import done_samples, read_params, store_summary
 from demseis.errors import InputError, StoreError, import_torch
-from demseis.generator.workers import start_forkserver
+from demseis.generator.sweep.workers import start_forkserver
 
 
 class Store:
@@ -162,11 +162,11 @@ class Store:
 
 
 def _resolve_config(config: Any) -> Any:
-    """A :class:`~demseis.generator.config.Config` from a Config, a dict, a preset name or a
+    """A :class:`~demseis.generator.config.settings.Config` from a Config, a dict, a preset name or a
     TOML path."""
     # lazy: the config loads the label and seismic stages (Numba, SciPy; ~0.7 s), which
     # demseis.open and demseis.score never need
-    from demseis.generator.config import PRESETS, Config, load_config, parse_config
+    from demseis.generator.config.settings import PRESETS, Config, load_config, parse_config
 
     if isinstance(config, Config):
         return config
@@ -179,7 +179,7 @@ def _resolve_config(config: Any) -> Any:
     if isinstance(config, (str, Path)):
         return load_config(config)
     raise InputError(f"config {config!r}: give a preset name ({', '.join(PRESETS)}), a TOML "
-                     "path, a dict or a demseis.generator.config.Config")
+                     "path, a dict or a demseis.generator.config.settings.Config")
 
 
 class WorkersWarning(UserWarning):
@@ -228,10 +228,10 @@ def generate(config: Any = None, *, out: str | Path, workers: int | None = None,
         warnings.warn(warning, WorkersWarning, stacklevel=2)
     if scheduler is None and workers != 0:
         # its preload (imports, Numba kernels) runs while this process imports the sweep,
-        # prepares the store and starts the scheduler (demseis.generator.workers)
+        # prepares the store and starts the scheduler (demseis.generator.sweep.workers)
         start_forkserver()
     # lazy: imported after start_forkserver() so that the server's preload runs meanwhile
-    from demseis.generator.sweep import run_sweep
+    from demseis.generator.sweep.driver import run_sweep
 
     summary = run_sweep(cfg, out, workers=workers, scheduler=scheduler, overwrite=overwrite,
                         progress=progress)

@@ -1,6 +1,6 @@
 """Every parameter of demseis, declared once: name, unit, range, default, doc and level.
 
-Config validation (:mod:`demseis.generator.config`), the stage checks (the DEM's
+Config validation (:mod:`demseis.generator.config.settings`), the stage checks (the DEM's
 :func:`~demseis.dem.integrator.validate_material` and :func:`~demseis.dem.fault.validate_fault`, the
 rock-property model's :meth:`~demseis.seismic.PropertyModel.validate`, the wavelet and noise
 checks), the defaults of :class:`~demseis.dem.Material` and
@@ -428,7 +428,7 @@ _DECLARED: tuple[Param, ...] = (
     _p("rendering", str, "sweep", "strata", choices=RENDERINGS, section="output",
        doc="elements: rock properties per DEM element, rasterised on the grid (the paper's "
            "mode); strata: a fine stratigraphy (beds below 1 m to tens of metres) looked up at "
-           "each point's reference coordinates (demseis.generator.survey, docs/seismic.md)"),
+           "each point's reference coordinates (demseis.generator.render.survey, docs/seismic.md)"),
     _p("strata_dz_m", float, "sweep", 1.0, 0.05, 1.0, unit="m", section="output",
        doc="strata rendering: vertical step of the stratigraphy lookup, at most (the grid cell "
            "is split into an odd number of steps no larger)"),

@@ -17,21 +17,19 @@ import numpy as np
 
 from demseis.datasets import open_store, read_particles, read_sample, shard_status
 from demseis.errors import ConfigError, InputError
-from demseis.evaluation.realism_report import report_rows
 from demseis.evaluation.fieldio import read_mask, read_section
-from demseis.evaluation.segyfile import (cube_geometry, is_segy, read_cube_line,
-                                        read_segy_section)
-from demseis.generator.config import PRESETS, Config, load_config, stored_config
+from demseis.evaluation.realism_report import report_rows
+from demseis.evaluation.segyfile import cube_geometry, is_segy, read_cube_line, read_segy_section
+from demseis.generator.config.layout import grid_of
+from demseis.generator.config.sampling import plan_run
+from demseis.generator.config.settings import PRESETS, Config, load_config, stored_config
 from demseis.generator.engines import get_engine, require_particles
-from demseis.generator.layout import grid_of
-from demseis.generator.runsetup import property_model_of, run_properties
-from demseis.generator.sampling import plan_run
+from demseis.generator.engines.runsetup import property_model_of, run_properties
 from demseis.labels import displacement_history, label_maps, strain_history
 from demseis.schema import sample_array
 from demseis.seismic import (element_properties, imaging_mode, property_grids, rasterise,
                              synthetic_sections)
 from demseis.types import Snapshot
-
 
 
 def noise_title(snr_db: float, kind: str) -> str:

@@ -212,18 +212,18 @@ IMAGING: Registry[Any] = Registry("imaging mode", {
     "psf": "demseis.seismic.imaging:PSF",
 }, group="demseis.imaging")
 
-#: how a state becomes the property columns the imaging reads (demseis.generator.render:
+#: how a state becomes the property columns the imaging reads (demseis.generator.render.section:
 #: ``Rendering``); the ``[output] rendering`` values
 RENDERINGS: Registry[Any] = Registry("rendering", {
-    "elements": "demseis.generator.render:ELEMENTS",
-    "strata": "demseis.generator.render:STRATA",
+    "elements": "demseis.generator.render.section:ELEMENTS",
+    "strata": "demseis.generator.render.section:STRATA",
 }, group="demseis.renderings")
 
-#: how the stored fault label is drawn on the output grid (demseis.generator.render:
+#: how the stored fault label is drawn on the output grid (demseis.generator.render.section:
 #: ``FaultStyle``); the ``[labels] fault_style`` values
 FAULT_STYLES: Registry[Any] = Registry("fault style", {
-    "picks": "demseis.generator.render:PICKS",
-    "traces": "demseis.generator.render:TRACES",
+    "picks": "demseis.generator.render.section:PICKS",
+    "traces": "demseis.generator.render.section:TRACES",
 }, group="demseis.fault_styles")
 
 #: how the fault targets are found in a snapshot's elements (demseis.labels.maps:

@@ -48,8 +48,8 @@ from demseis.errors import InputError
 from demseis.evaluation.fieldio import read_amplitudes
 from demseis.evaluation.realism_report import section_measures, store_measures
 from demseis.evaluation.segyfile import is_segy
-from demseis.generator.config import load_config, parse_config
-from demseis.generator.sweep import run_sweep
+from demseis.generator.config.settings import load_config, parse_config
+from demseis.generator.sweep.driver import run_sweep
 from demseis.seismic.wavelet import Wavelet, estimate_wavelet
 
 #: the measures calibrated and compared (those of ``demseis realism``)

@@ -37,7 +37,7 @@ def _snapshots(store: str | None, run: int, cell_m: float):
         return (snaps, Grid.covering(2500.0, 1100.0, cell_m),
                 "kinematic toy fault (demseis.diagnostics.toys), not DEM")
     from demseis.datasets import open_store, read_particles
-    from demseis.generator.config import parse_config
+    from demseis.generator.config.settings import parse_config
 
     model = parse_config(dict(open_store(store).attrs)["config"], source=store).model
     return (read_particles(store, run), Grid.covering(model.width_m, model.height_m, cell_m),

@@ -35,12 +35,12 @@ def main() -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
     from dem_stretch import _value, config
-    from demseis.generator.config import parse_config
+
+    from demseis.generator.config.layout import grid_of
+    from demseis.generator.config.sampling import plan_run
+    from demseis.generator.config.settings import parse_config
     from demseis.generator.engines import get_engine
-    from demseis.generator.layout import grid_of
-    from demseis.generator.sampling import plan_run
     from demseis.plotting import _draw_particles, layer_colors
     from demseis.seismic import synthetic_sections
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 import demseis
-from demseis.generator.config import load_config
+from demseis.generator.config.settings import load_config
 from demseis.seismic import Wavelet
 
 #: (title, [sweep] values) of each section panel

@@ -79,7 +79,7 @@ def test_score_the_labels_themselves(tiny):
 
 
 def test_generate_takes_dicts_and_refuses_bad_configs(tiny, tmp_path):
-    from demseis.generator.config import load_config
+    from demseis.generator.config.settings import load_config
 
     raw = load_config(preset="tiny").to_dict()
     raw["sweep"]["dip_deg"] = 85.0

@@ -10,7 +10,7 @@ import os
 import pytest
 
 from demseis.cli import build_parser, main
-from demseis.generator.sweep import human_bytes
+from demseis.generator.sweep.driver import human_bytes
 
 
 def _commands(parser: argparse.ArgumentParser, prefix: str = ""):
@@ -97,7 +97,7 @@ def test_api_warns_about_more_workers_than_cores(monkeypatch, tmp_path):
 
 
 def test_relabel_progress_says_relabel(tiny_store, tmp_path, capsys):
-    from demseis.generator.rerender import relabel
+    from demseis.generator.sweep.rerender import relabel
 
     relabel(tiny_store, tmp_path / "l.zarr", labels={}, progress=True)
     err = capsys.readouterr().err

@@ -103,8 +103,8 @@ def test_watched_raises_a_swallowed_ctrl_c_at_its_end_and_restores():
 
 def test_in_process_sweep_stops_at_the_next_run(tmp_path, monkeypatch):
     """workers=0: the first run swallows a Ctrl-C; the sweep stops before the second."""
-    import demseis.generator.sweep as sweep
-    from demseis.generator.config import load_config
+    import demseis.generator.sweep.driver as sweep
+    from demseis.generator.config.settings import load_config
 
     real = sweep.shard_task
     calls = []
@@ -129,7 +129,7 @@ def test_in_process_sweep_stops_at_the_next_run(tmp_path, monkeypatch):
 _SCRIPT = """
 import os, signal, sys, time
 sys.path.insert(0, {root!r})
-import demseis.generator.sweep as sweep
+import demseis.generator.sweep.driver as sweep
 from tests.test_interrupts import swallow_sigint
 real = sweep._account
 def account(*args):
@@ -167,7 +167,7 @@ def test_cli_sweep_with_workers_stops_soon_after_a_swallowed_ctrl_c(tmp_path):
 _FINALIZE_SCRIPT = """
 import os, signal, sys
 sys.path.insert(0, {root!r})
-import demseis.generator.sweep as sweep
+import demseis.generator.sweep.driver as sweep
 real = sweep.finalize_store
 def finalize(out):
     os.kill(os.getpid(), signal.SIGINT)

@@ -14,6 +14,8 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 PKG = ROOT / "demseis"
 STAGES = ("dem", "seismic", "labels")
@@ -91,6 +93,60 @@ def test_imports_run_one_way():
                 bad.append(f"{rel}:{line} ({me}, rank {RANK[me]}) imports {mod} "
                            f"({other}, rank {RANK.get(other)})")
     assert not bad, "imports against the data flow:\n" + "\n".join(bad)
+
+
+#: the layers of ``demseis/generator``: a module may import its own layer and those below it
+GENERATOR_LAYERS = {"config": 0, "engines": 1, "render": 2, "sweep": 3}
+
+
+def _generator_layer(module: str) -> str | None:
+    """The generator layer of a ``demseis.generator...`` module name, None for the package."""
+    parts = module.split(".")
+    return parts[2] if len(parts) > 2 and parts[:2] == ["demseis", "generator"] else None
+
+
+def test_generator_layers_run_one_way():
+    """config <- engines <- render <- sweep, every module of demseis/generator in a layer."""
+    gen = PKG / "generator"
+    bad = []
+    for path in sorted(p for p in gen.rglob("*.py") if "__pycache__" not in p.parts):
+        rel = path.relative_to(gen)
+        if rel.parts == ("__init__.py",):
+            continue
+        me = rel.parts[0]
+        if me not in GENERATOR_LAYERS:
+            bad.append(f"demseis/generator/{rel.as_posix()} is in no layer")
+            continue
+        for mod, names, line in _imports(path):
+            if mod == "demseis.generator":
+                others = names  # from demseis.generator import <layer>
+            elif mod.startswith("demseis.generator."):
+                others = [_generator_layer(mod)]
+            else:
+                continue
+            for other in others:
+                if GENERATOR_LAYERS.get(other, 99) > GENERATOR_LAYERS[me]:
+                    bad.append(f"demseis/generator/{rel.as_posix()}:{line} ({me}) imports {mod} "
+                               f"({other})")
+    assert not bad, "generator layers imported against their order:\n" + "\n".join(bad)
+
+
+def test_generator_layer_check_is_not_vacuous(tmp_path, monkeypatch):
+    fake = tmp_path / "demseis"
+    for sub in ("generator/config", "generator/render", "generator/stray"):
+        (fake / sub).mkdir(parents=True)
+    (fake / "__init__.py").write_text("")
+    (fake / "generator" / "config" / "x.py").write_text(
+        "from demseis.generator.render.section import render_run\n")
+    (fake / "generator" / "render" / "y.py").write_text("from demseis.generator.config import x\n")
+    (fake / "generator" / "stray" / "z.py").write_text("")
+    monkeypatch.setattr(f"{__name__}.PKG", fake)
+    monkeypatch.setattr(f"{__name__}.ROOT", tmp_path)
+    with pytest.raises(AssertionError) as err:
+        test_generator_layers_run_one_way()
+    msg = str(err.value)
+    assert "config/x.py:1 (config) imports demseis.generator.render.section" in msg, msg
+    assert "render/y.py" not in msg and "stray/z.py is in no layer" in msg, msg
 
 
 def test_root_imports_lazily():
@@ -318,7 +374,7 @@ LAZY_LIBRARIES = ("torch", "matplotlib", "xarray", "zarr", "dask", "distributed"
 #: heavy library (the dask worker plugin, the Numba kernels of the semblance baseline)
 LAZY_PACKAGE = {
     "__init__.py": None, "api.py": None, "cli": None,
-    "generator/sweep.py": {"demseis.generator._worker"},
+    "generator/sweep/driver.py": {"demseis.generator.sweep._worker"},
     "evaluation/baseline.py": {"demseis.evaluation._kernels"},
 }
 
@@ -352,6 +408,6 @@ def test_functions_import_only_heavy_libraries():
 def test_lazy_import_rule_is_not_vacuous():
     assert _lazy_allowed(Path("plotting.py"), "matplotlib.pyplot")
     assert _lazy_allowed(Path("cli/store.py"), "demseis.datasets.read")
-    assert not _lazy_allowed(Path("generator/sweep.py"), "demseis.datasets")
+    assert not _lazy_allowed(Path("generator/sweep/driver.py"), "demseis.datasets")
     assert not _lazy_allowed(Path("labels/maps.py"), "demseis.labels.traces")
     assert not _lazy_allowed(Path("datasets/read.py"), "json")

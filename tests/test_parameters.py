@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from demseis.errors import ConfigError, InputError
-from demseis.generator.config import load_config, parse_config
+from demseis.generator.config.settings import load_config, parse_config
 from demseis.parameters import BED_FIELDS, MATERIAL_FIELDS, PARAMS, PROPERTY_FIELDS, markdown_table
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "parameters.md"
@@ -163,7 +163,7 @@ GENERATOR_ONLY = {"seed", "n_runs", "renders_per_snapshot", "fault_x_frac", "n_l
                   "planar_faults", "planar_dip_min_deg", "planar_dip_max_deg",
                   "planar_throw_min_m", "planar_throw_max_m", "planar_reverse_fraction",
                   "planar_tilt_deg",
-                  # survey sampling and the strata rendering (demseis.generator.survey)
+                  # survey sampling and the strata rendering (demseis.generator.render.survey)
                   "trace_spacing_m", "strata_dz_m", "fault_zone_impedance",
                   # the DEM engine's library of settled packs (demseis.generator.engines.dem)
                   "pack_library"}
@@ -289,7 +289,7 @@ def test_cli_params_prints_the_table(capsys):
 
 def test_defaults_come_from_the_declaration():
     from demseis.dem import Material, NormalFault
-    from demseis.generator.config import ModelSection
+    from demseis.generator.config.settings import ModelSection
     from demseis.seismic import PropertyModel
 
     for field, name in MATERIAL_FIELDS.items():

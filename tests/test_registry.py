@@ -62,7 +62,7 @@ def test_installed_entry_points_join_after_the_builtins(tmp_path):
         "[demseis.arrays]\nlayer_parity = tests.generator._flat:PARITY\n")
     code = ("from demseis.registry import ENGINES\n"
             "from demseis.schema import SAMPLE_ARRAYS\n"
-            "from demseis.generator.config import load_config, parse_config\n"
+            "from demseis.generator.config.settings import load_config, parse_config\n"
             "raw = load_config(preset='tiny').to_dict(); raw['model']['engine'] = 'flat'\n"
             "print(ENGINES.names()); print(SAMPLE_ARRAYS.names()[-1])\n"
             "print(type(ENGINES.get('flat')).__name__, SAMPLE_ARRAYS.get('layer_parity').name)\n"

@@ -13,7 +13,7 @@ import pytest
 
 import demseis
 from demseis.errors import InputError
-from demseis.generator.config import load_config, parse_config
+from demseis.generator.config.settings import load_config, parse_config
 from demseis.seismic.segy import write_segy
 from demseis.survey_fit import MEASURES, fit, read_sampling, to_toml
 from tests._helpers import ROOT

@@ -80,14 +80,14 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
 def cmd_generate(args: argparse.Namespace) -> int:
     from demseis.api import WorkersWarning, generate, workers_warning
-    from demseis.generator.config import load_config
-    from demseis.generator.sweep import dry_run_plan, pending_runs
+    from demseis.generator.config.settings import load_config
+    from demseis.generator.sweep.driver import dry_run_plan, pending_runs
 
     if args.like:
         if args.config is not None:
             raise InputError("give a CONFIG or --like SECTION, not both (demseis fit writes the "
                              "fitted config to a file you can edit)")
-        from demseis.generator.config import parse_config
+        from demseis.generator.config.settings import parse_config
         from demseis.survey_fit import fit
 
         dt = None if args.dt_ms is None else args.dt_ms / 1000.0
@@ -131,7 +131,7 @@ def _float_list(text: str, name: str) -> list[float]:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
-    from demseis.generator.rerender import rerender
+    from demseis.generator.sweep.rerender import rerender
 
     freqs = _float_list(args.freq, "--freq")
     snrs = _float_list(args.snr, "--snr")
@@ -180,7 +180,7 @@ def _flag_message(message: str) -> str:
 
 
 def cmd_relabel(args: argparse.Namespace) -> int:
-    from demseis.generator.rerender import relabel
+    from demseis.generator.sweep.rerender import relabel
 
     try:
         with open(args.labels, "rb") as fh:

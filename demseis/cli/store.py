@@ -59,7 +59,7 @@ def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction)
 
 def cmd_info(args: argparse.Namespace) -> int:
     from demseis.api import open as open_store
-    from demseis.generator.faultinfo import fault_distribution
+    from demseis.generator.sweep.faultinfo import fault_distribution
 
     print("\n".join([open_store(args.path).summary(), *fault_distribution(args.path)]))
     return 0

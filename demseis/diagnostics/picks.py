@@ -16,14 +16,14 @@ import numpy as np
 from scipy import ndimage
 
 from demseis.errors import InputError
-from demseis.generator.config import Config, load_config, parse_config
+from demseis.generator.config.layout import grid_of, time_axis_of, trace_spacing, trace_x
+from demseis.generator.config.sampling import SEED_DEM, plan_run, rng_at
+from demseis.generator.config.settings import Config, load_config, parse_config
 from demseis.generator.engines import get_engine
 from demseis.generator.engines.kinematic import kinematic_faults
-from demseis.generator.layout import grid_of, time_axis_of
-from demseis.generator.render import (empty_shard, imaging_input, render_state,
-                                      renders_by_snapshot, state_maps)
-from demseis.generator.sampling import SEED_DEM, plan_run, rng_at
-from demseis.generator.survey import labels_at_traces, trace_spacing, trace_x
+from demseis.generator.render.section import (empty_shard, imaging_input, render_state,
+                                              renders_by_snapshot, state_maps)
+from demseis.generator.render.survey import labels_at_traces
 from demseis.labels import loop_count, rung_fraction
 
 

@@ -130,8 +130,8 @@ def digest(path: Path) -> dict[str, str]:
 
 def mini_config(domain: str = "depth"):
     """A sweep of one minute DEM run (a few seconds once Numba's cache is warm); 30 m of throw passes
-    the relaxation-time check of demseis.generator.physics at 5 m/s (20 m did not)."""
-    from demseis.generator.config import load_config, parse_config
+    the relaxation-time check of demseis.generator.engines.physics at 5 m/s (20 m did not)."""
+    from demseis.generator.config.settings import load_config, parse_config
 
     raw = load_config(preset="tiny").to_dict()
     raw["sweep"].update(n_runs=1, n_layers=2, throw_m=30.0, dip_deg=60.0, snr_db=[10.0],

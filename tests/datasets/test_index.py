@@ -111,8 +111,8 @@ def test_the_sweep_updates_the_index_as_runs_finish(tmp_path, monkeypatch):
     """With the update interval at 0 the driver updates after every run; finalize_store's
     update is switched off, so the index the store ends with is the sweep's."""
     import demseis.datasets.status as status
-    import demseis.generator.sweep as sweep
-    from demseis.generator.config import load_config, parse_config
+    import demseis.generator.sweep.driver as sweep
+    from demseis.generator.config.settings import load_config, parse_config
 
     calls = []
     real = sweep.update_index

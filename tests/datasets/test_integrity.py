@@ -16,18 +16,10 @@ import pytest
 import demseis
 import demseis.datasets._shardio as shardio
 import demseis.datasets.dataset as dataset
-from demseis.datasets.index import update_index
 from demseis.cli import main
-from demseis.datasets import (
-    FaultSegDataset,
-    ParamSpec,
-    damaged_shards,
-    read_layout,
-    read_sample,
-    shard_status,
-    validate_store,
-    write_shard,
-)
+from demseis.datasets import (FaultSegDataset, ParamSpec, damaged_shards, read_layout, read_sample,
+                              shard_status, validate_store, write_shard)
+from demseis.datasets.index import update_index
 from demseis.errors import StoreError
 from tests.datasets._helpers import PARAMS, digest, make_store, mini_config, shard_data
 
@@ -252,7 +244,7 @@ def test_every_chunk_has_a_crc32c(pristine):
 
 
 def test_plot_of_a_damaged_or_pending_sample_fails_clearly(tmp_path, capsys):
-    from demseis.generator.sweep import run_sweep  # the generator loads numba: only here
+    from demseis.generator.sweep.driver import run_sweep  # the generator loads numba: only here
 
     out = tmp_path / "g.zarr"
     run_sweep(mini_config(), out, workers=0, progress=False)

@@ -22,7 +22,7 @@ from tests.datasets._helpers import PARAMS, make_store, mini_config  # noqa: E40
 
 @pytest.fixture(scope="module", params=["depth", "time"])
 def generated(request, tmp_path_factory):
-    from demseis.generator.sweep import run_sweep  # the generator loads numba: only here
+    from demseis.generator.sweep.driver import run_sweep  # the generator loads numba: only here
 
     cfg = mini_config(request.param)
     out = tmp_path_factory.mktemp(request.param) / "g.zarr"
@@ -51,7 +51,7 @@ def test_open_datatree_opens_every_group(generated):
 
 
 def test_to_xarray_coordinates_units_and_categories(generated):
-    from demseis.generator.layout import grid_of, time_axis_of  # loads numba: only here
+    from demseis.generator.config.layout import grid_of, time_axis_of  # loads numba: only here
 
     cfg, out = generated
     ds = to_xarray(out)

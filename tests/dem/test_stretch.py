@@ -11,8 +11,8 @@ import pytest
 
 from demseis.dem import BasementFault, FaultSystem, Material, build_assembly, simulate
 from demseis.dem.basement import block_kinematics, single
-from demseis.dem.integrator import time_step
 from demseis.dem.fault import basement_walls, stretch_shift, wall_ends
+from demseis.dem.integrator import time_step
 from demseis.errors import ConfigError, InputError
 
 W, H, RMAX = 2500.0, 1100.0, 25.0
@@ -91,7 +91,7 @@ def test_stretch_rides_on_the_blocks():
 
 
 def _brittle_cfg(stretch, structure="none", **sweep):
-    from demseis.generator.config import parse_config
+    from demseis.generator.config.settings import parse_config
 
     raw = {"name": "s", "sweep": {"n_runs": 1, "structure": structure, "base_stretch": stretch,
                                   "contact_model": "brittle", "bond_strain": 0.005,
@@ -103,9 +103,9 @@ def _brittle_cfg(stretch, structure="none", **sweep):
 
 
 def _render(cfg):
+    from demseis.generator.config.sampling import plan_run
     from demseis.generator.engines import get_engine
-    from demseis.generator.render import render_run
-    from demseis.generator.sampling import plan_run
+    from demseis.generator.render.section import render_run
 
     engine = get_engine(cfg.model.engine)
     run = engine.simulate(cfg, plan_run(cfg, 0))
@@ -130,9 +130,9 @@ def test_brittle_cover_over_a_stretching_base_grows_a_fault_population(stretched
     # so the spec is edited after the config checks)
     import dataclasses
 
+    from demseis.generator.config.sampling import plan_run
     from demseis.generator.engines import get_engine
-    from demseis.generator.render import render_run
-    from demseis.generator.sampling import plan_run
+    from demseis.generator.render.section import render_run
 
     cfg = _brittle_cfg(0.1)
     spec = plan_run(cfg, 0)
@@ -247,8 +247,8 @@ def test_same_seed_same_bytes():
 
 
 def test_bad_input_is_refused():
-    from demseis.generator.config import parse_config
-    from demseis.generator.runsetup import fault_system_of
+    from demseis.generator.config.settings import parse_config
+    from demseis.generator.engines.runsetup import fault_system_of
 
     asm = build_assembly(600.0, 300.0, radius_min_m=10.0, radius_max_m=20.0, n_layers=2, rng=1)
     with pytest.raises(InputError, match="base_stretch"):
@@ -275,7 +275,7 @@ def test_bad_input_is_refused():
 
 def test_kinematic_engine_runs_structure_none():
     """The kinematic engine takes a run without basement faults (it draws none of its own)."""
-    from demseis.generator.config import parse_config
+    from demseis.generator.config.settings import parse_config
 
     cfg = parse_config({"sweep": {"n_runs": 1, "structure": "none", "base_stretch": 0.1,
                                   "n_layers": 8, "freq_hz": 30, "throw_m": 100.0},

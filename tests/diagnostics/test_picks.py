@@ -10,11 +10,10 @@ import pytest
 import demseis
 from demseis.diagnostics.picks import (kinematic_agreement, planar_fault_sweep, shape_counts,
                                        true_trace)
+from demseis.generator.config.layout import grid_of, trace_spacing
+from demseis.generator.config.sampling import SEED_DEM, plan_run, rng_at
 from demseis.generator.engines import get_engine
 from demseis.generator.engines.kinematic import kinematic_faults
-from demseis.generator.layout import grid_of
-from demseis.generator.sampling import SEED_DEM, plan_run, rng_at
-from demseis.generator.survey import trace_spacing
 
 
 def _pooled(rows, key, weight):

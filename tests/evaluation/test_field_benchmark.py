@@ -40,9 +40,9 @@ def _png(path: Path, arr: np.ndarray, mode: str) -> None:
 def field(tmp_path_factory, tiny_store):
     """A field set in the tutorial-03 layout: seismic_<key>.png drawn 1.5 times the size of its
     mask_<key>.png (black lines 3 px wide on a transparent background); and the truth."""
-    import demseis
     from scipy import ndimage
 
+    import demseis
     from demseis.seismic.segy import write_segy
 
     root = tmp_path_factory.mktemp("field")
@@ -172,7 +172,7 @@ def test_input_errors(bench, common, field, tmp_path):
 
 
 def _has_planar() -> bool:
-    from demseis.generator.config import PRESETS
+    from demseis.generator.config.settings import PRESETS
 
     return "planar" in PRESETS
 

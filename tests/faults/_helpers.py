@@ -41,7 +41,7 @@ def dask_workers(driver_pid: int) -> list:
     """The sweep's dask worker processes below ``driver_pid`` (psutil processes).
 
     Spawned workers run multiprocessing's ``spawn_main``; forked ones (the default start method,
-    see ``demseis.generator.sweep.worker_start_method``) are the children of the forkserver, a
+    see ``demseis.generator.sweep.driver.worker_start_method``) are the children of the forkserver, a
     child of the driver whose command line names ``multiprocessing.forkserver``.
     """
     import psutil

@@ -10,7 +10,7 @@ import sys
 import pytest
 
 from tests.faults._helpers import (FINISHED, INTERRUPTED, ROOT, done_shards, interrupt, spawn,
-                                  wait_for)
+                                   wait_for)
 from tests.generator._helpers import assert_same_bytes
 
 CFG = "[sweep]\nn_runs = 8\n"
@@ -94,7 +94,7 @@ def test_ctrl_c_of_a_read_only_command_says_nothing_about_resuming(tmp_path, mon
                                                                    capsys, command):
     """issue 30: a read-only command has nothing to resume; its interrupt is one plain line."""
     import demseis.datasets.validate as validate
-    import demseis.generator.faultinfo as faultinfo
+    import demseis.generator.sweep.faultinfo as faultinfo
     from demseis.cli import main
 
     def interrupted(*args, **kwargs):

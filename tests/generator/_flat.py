@@ -11,9 +11,9 @@ from typing import Any
 import numpy as np
 
 from demseis.errors import ConfigError
+from demseis.generator.config.layout import grid_of
 from demseis.generator.engines import EngineRun, State
-from demseis.generator.layout import grid_of
-from demseis.generator.runsetup import run_info, run_strata
+from demseis.generator.engines.runsetup import run_info, run_strata
 from demseis.schema import SampleArray, engine_labels, sample_array
 from demseis.seismic import LayerProperties
 

@@ -35,7 +35,7 @@ def assert_same_bytes(a: Path, b: Path) -> None:
 
 def kinematic_cfg(preset: str = "tiny", **model):
     """The config of ``preset`` with the kinematic engine (and ``model`` fields replaced)."""
-    from demseis.generator.config import load_config
+    from demseis.generator.config.settings import load_config
 
     cfg = load_config(preset=preset)
     return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, engine="kinematic",

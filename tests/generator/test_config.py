@@ -8,10 +8,10 @@ import sys
 
 import pytest
 
-from demseis.errors import ConfigError
 from demseis.cli import main
-from demseis.generator.config import PRESETS, load_config, parse_config
-from demseis.generator.params import DistSpec, Fixed, GridSpec
+from demseis.errors import ConfigError
+from demseis.generator.config.params import DistSpec, Fixed, GridSpec
+from demseis.generator.config.settings import PRESETS, load_config, parse_config
 
 # (TOML text, a fragment the one-line error must contain)
 MALFORMED = [
@@ -178,7 +178,7 @@ def test_a_mistyped_key_gets_did_you_mean_not_a_list_of_every_key(raw, message):
 def test_a_store_written_before_a_parameter_existed_resumes_at_its_default():
     """A stored config lacking a parameter declared since compares equal when the new config
     leaves it at its default, and differs when it does not."""
-    from demseis.generator.sweep import _first_difference, _with_new_defaults
+    from demseis.generator.sweep.driver import _first_difference, _with_new_defaults
 
     new = load_config(preset="tiny").to_dict()
     old = {k: dict(v) if isinstance(v, dict) else v for k, v in new.items()}

@@ -14,9 +14,9 @@ from scipy import ndimage
 import demseis
 from demseis.datasets import FaultSegDataset, validate_store
 from demseis.errors import ConfigError
-from demseis.generator.config import load_config, parse_config
+from demseis.generator.config.settings import load_config, parse_config
 from demseis.generator.engines import Engine, State, get_engine
-from demseis.generator.rerender import rerender
+from demseis.generator.sweep.rerender import rerender
 from demseis.registry import ENGINES, IMAGING
 from demseis.schema import SAMPLE_ARRAYS, SampleArray, register_array, stored_arrays
 from demseis.seismic import ImagingMode, synthetic_sections
@@ -196,7 +196,7 @@ def test_a_registered_rendering_and_fault_style_go_from_generate_to_the_store(tm
     """issue 36 item 4: a rendering and a fault style are one registration each. The toy
     rendering images the elements rendering's columns with Vp scaled (density kept), and the
     toy style draws no fault."""
-    from demseis.generator.render import ELEMENTS, FaultStyle, Rendering
+    from demseis.generator.render.section import ELEMENTS, FaultStyle, Rendering
     from demseis.registry import FAULT_STYLES, RENDERINGS
 
     def faster(cfg, state, maps, params):

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from demseis.dem import NormalFault
-from demseis.generator.config import load_config, parse_config
+from demseis.generator.config.layout import param_codes, param_dtypes
+from demseis.generator.config.sampling import plan_run
+from demseis.generator.config.settings import load_config, parse_config
 from demseis.generator.engines import get_engine
-from demseis.generator.layout import param_codes, param_dtypes
-from demseis.generator.render import render_run
-from demseis.generator.runsetup import fault_system_of, run_info
-from demseis.generator.sampling import plan_run
+from demseis.generator.engines.runsetup import fault_system_of, run_info
+from demseis.generator.render.section import render_run
 from demseis.parameters import PARAMS
 
 
@@ -75,7 +75,7 @@ def test_samples_record_their_basement_faults():
 
 def test_fault_distribution_counts_runs(tmp_path):
     from demseis.datasets import create_store, write_shard
-    from demseis.generator.faultinfo import fault_distribution
+    from demseis.generator.sweep.faultinfo import fault_distribution
 
     # 3 runs of 2 samples; the third is not done (never written)
     cols = {"sample_in_run": [0, 1, 0, 1, 0, 1], "n_basement_faults": [2, 2, 1, 1, 0, 0],

@@ -7,8 +7,8 @@ import pytest
 import zarr
 
 from demseis.cli import main
-from tests.generator._helpers import assert_same_bytes, tree_bytes
 from tests._helpers import params_of
+from tests.generator._helpers import assert_same_bytes, tree_bytes
 
 
 def test_tiny_store_contents(tiny_store):
@@ -247,8 +247,8 @@ def test_unreachable_scheduler_writes_nothing(tmp_path, capsys):
 
 def test_time_domain_output(tmp_path):
     """domain = "time": sections and labels share one TWT axis; labels are the depth labels mapped."""
-    from demseis.generator.config import load_config
-    from demseis.generator.layout import sample_shape
+    from demseis.generator.config.layout import sample_shape
+    from demseis.generator.config.settings import load_config
 
     cfg_file = tmp_path / "c.toml"
     cfg_file.write_text("[sweep]\nn_runs = 1\n[output]\ndomain = \"time\"\ndt_s = 0.002\n")
@@ -272,8 +272,8 @@ def test_time_domain_output(tmp_path):
 def test_unstable_run_recorded_and_sweep_goes_on(tmp_path, monkeypatch, capsys):
     """A SimulationError in one run is recorded with its message; the other runs are written;
     a rerun retries only the failed run."""
+    import demseis.generator.sweep.driver as sweep
     from demseis.errors import SimulationError
-    from demseis.generator import sweep
 
     real = sweep.run_shard
 

@@ -9,10 +9,10 @@ import pytest
 from scipy.integrate import quad
 
 from demseis.errors import InputError
+from demseis.generator.config.layout import grid_of
+from demseis.generator.config.sampling import plan_run
 from demseis.generator.engines.kinematic import fault_geometry, kinematic_state
-from demseis.generator.layout import grid_of
-from demseis.generator.runsetup import run_info
-from demseis.generator.sampling import plan_run
+from demseis.generator.engines.runsetup import run_info
 from tests.generator._helpers import kinematic_cfg
 
 
@@ -110,7 +110,7 @@ def test_store_passes_validate_dataset_and_score(kin_store):
 
 
 def test_same_config_same_bytes(tmp_path):
-    from demseis.generator.pipeline import run_shard
+    from demseis.generator.sweep.pipeline import run_shard
 
     cfg = kinematic_cfg()
     a, b = run_shard(cfg, 1), run_shard(cfg, 1)
@@ -120,7 +120,7 @@ def test_same_config_same_bytes(tmp_path):
 
 
 def test_particle_commands_refuse_a_kinematic_store(kin_store, tmp_path):
-    from demseis.generator.rerender import relabel, rerender
+    from demseis.generator.sweep.rerender import relabel, rerender
     from demseis.plotting import preview
 
     with pytest.raises(InputError, match="kinematic"):
@@ -132,7 +132,7 @@ def test_particle_commands_refuse_a_kinematic_store(kin_store, tmp_path):
 
 
 def _population_cfg(stretch: float, n: int = 12):
-    from demseis.generator.config import load_config, parse_config
+    from demseis.generator.config.settings import load_config, parse_config
 
     raw = load_config(preset="quick").to_dict()
     raw["sweep"].update(base_stretch=stretch, population_faults=n, n_runs=2)

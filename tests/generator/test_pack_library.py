@@ -14,12 +14,12 @@ import pytest
 
 import demseis
 from demseis.errors import ConfigError
-from demseis.generator.config import load_config, parse_config, stored_config
+from demseis.generator.config.params import Fixed
+from demseis.generator.config.sampling import plan_run
+from demseis.generator.config.settings import load_config, parse_config, stored_config
 from demseis.generator.engines.dem import (ENGINE, library_material, pack_cache_dir, pack_index,
                                            run_pack)
-from demseis.generator.params import Fixed
-from demseis.generator.sampling import plan_run
-from demseis.generator.sweep import pending_runs
+from demseis.generator.sweep.driver import pending_runs
 
 DIGEST = runpy.run_path(str(Path(__file__).resolve().parents[2] / "benchmarks" /
                             "store_digest.py"))["digest"]

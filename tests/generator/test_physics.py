@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from demseis.errors import ConfigError
-from demseis.generator.config import load_config, parse_config
-from demseis.generator.params import spec_values_hint
-from demseis.generator.physics import MAX_WALL_MACH, check_physics, p_wave_speed_m_s
+from demseis.generator.config.params import spec_values_hint
+from demseis.generator.config.settings import load_config, parse_config
+from demseis.generator.engines.physics import MAX_WALL_MACH, check_physics, p_wave_speed_m_s
 from tests.generator._helpers import generate_tiny
 
 

@@ -10,10 +10,9 @@ import numpy as np
 import pytest
 
 from demseis.errors import ConfigError
-from demseis.generator.config import load_config, parse_config
-from demseis.generator.engines.planar import (REFLECTIVITY_MAX, planar_model,
-                                              reflectivity_strata)
-from demseis.generator.sampling import plan_run
+from demseis.generator.config.sampling import plan_run
+from demseis.generator.config.settings import load_config, parse_config
+from demseis.generator.engines.planar import REFLECTIVITY_MAX, planar_model, reflectivity_strata
 
 #: the benchmark's second variant, as the preset's comment gives it
 MANY = {"planar_faults": {"dist": "choice", "values": list(range(3, 11))},
@@ -35,7 +34,7 @@ def one_fault_cfg(**sweep):
 
 
 def test_same_config_same_bytes():
-    from demseis.generator.pipeline import run_shard
+    from demseis.generator.sweep.pipeline import run_shard
 
     cfg = parse_config(planar_raw())
     a, b = run_shard(cfg, 1), run_shard(cfg, 1)
@@ -60,7 +59,7 @@ def _pixel_scale(cfg, run: int) -> tuple[float, float]:
 
 def _final_samples(cfg):
     """(run, final-snapshot sample arrays) of every run of ``cfg``, rendered in-process."""
-    from demseis.generator.pipeline import run_shard
+    from demseis.generator.sweep.pipeline import run_shard
 
     last = cfg.model.n_snapshots - 1
     for run in range(cfg.sweep.n_runs):
@@ -108,7 +107,7 @@ def test_labels_lie_on_the_drawn_fault_planes_with_the_drawn_dips():
 
 
 def test_snapshot_zero_is_unfaulted_and_throws_grow():
-    from demseis.generator.pipeline import run_shard
+    from demseis.generator.sweep.pipeline import run_shard
 
     cfg = parse_config(planar_raw())
     shard = run_shard(cfg, 0)

@@ -63,7 +63,7 @@ def test_relabel_rejects_a_bad_labels_file(tmp_path, capsys):
 def test_relabel_of_a_store_from_before_the_strata_rendering_keeps_its_seismic(tmp_path):
     """A store whose config has no [output] rendering was rendered from elements; relabelling
     it must not switch to the strata default."""
-    from demseis.generator.config import load_config, stored_config
+    from demseis.generator.config.settings import load_config, stored_config
 
     src, old = _store_of_a_previous_version(tmp_path, '[output]\nrendering = "elements"\n',
                                             "output", "rendering")
@@ -77,8 +77,8 @@ def test_a_store_from_before_the_picks_keeps_its_traces_and_relabel_picks_them(t
     it again keeps them; ``relabel`` with an empty [labels] table draws them as picks."""
     import zarr
 
-    from demseis.generator.config import stored_config
-    from demseis.generator.rerender import rerender
+    from demseis.generator.config.settings import stored_config
+    from demseis.generator.sweep.rerender import rerender
 
     src, old = _store_of_a_previous_version(
         tmp_path, '[labels]\nfault_style = "traces"\nthickness_cells = 3.0\n', "labels",

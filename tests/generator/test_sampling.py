@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from demseis.generator.config import parse_config
-from demseis.generator.sampling import plan_run, run_params
+from demseis.generator.config.sampling import plan_run, run_params
+from demseis.generator.config.settings import parse_config
 
 
 def _cfg(**sweep):
@@ -52,7 +52,7 @@ def test_truncnormal_inversion_matches_scipy():
     """DistSpec's inverse-CDF truncated normal equals scipy.stats.truncnorm.ppf at the same u."""
     from scipy import stats
 
-    from demseis.generator.params import DistSpec
+    from demseis.generator.config.params import DistSpec
 
     class FixedU:
         def __init__(self, u):

@@ -9,15 +9,15 @@ import pytest
 
 from demseis.cli import main
 from demseis.errors import SimulationError
-from demseis.generator.config import load_config, parse_config
+from demseis.generator.config.settings import load_config, parse_config
 from demseis.generator.engines import dem as dem_engine
-from demseis.generator.pipeline import run_shard
-
-from ._helpers import generate_tiny
+from demseis.generator.sweep.pipeline import run_shard
 from tests._helpers import params_of
 from tests.datasets._helpers import drop_param
 
-#: the minute model of the Numba warm-up (demseis.generator.sweep.warm_numba_cache)
+from ._helpers import generate_tiny
+
+#: the minute model of the Numba warm-up (demseis.generator.sweep.driver.warm_numba_cache)
 MINUTE = ('[sweep]\nn_runs = 2\nn_layers = 2\nthrow_m = 20.0\ndip_deg = 60.0\n'
           '[model]\nn_snapshots = 2\nwidth_m = 300.0\nheight_m = 200.0\nwall_speed_m_s = 1.0\n')
 
@@ -130,7 +130,7 @@ def test_variety_run_46_is_stabilised_on_its_first_retry():
     raw = load_config(preset="variety").to_dict()
     raw["sweep"]["n_runs"] = 48
     cfg = parse_config(raw)
-    from demseis.generator.sampling import plan_run
+    from demseis.generator.config.sampling import plan_run
 
     run = dem_engine.ENGINE.simulate(cfg, plan_run(cfg, 46))
     assert run.info.values["dem_attempt"] == 1

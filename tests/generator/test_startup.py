@@ -3,7 +3,7 @@
 The workers need no user code: a script without an ``if __name__ == "__main__":`` guard, a
 script read from stdin, ``python -m`` of an unguarded module and code run the way a notebook
 kernel runs it (``python -c``) must each generate once and exit, under both worker start methods
-(demseis.generator.workers.main_module_hidden). Each case runs in its own interpreter.
+(demseis.generator.sweep.workers.main_module_hidden). Each case runs in its own interpreter.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import types
 
 import pytest
 
-from demseis.generator.workers import main_module_hidden
+from demseis.generator.sweep.workers import main_module_hidden
 from tests._helpers import ROOT
 
 #: an unguarded user script: a small kinematic sweep (no DEM) with the default workers

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from demseis.generator.config import parse_config
-from demseis.generator.layout import sample_shape
-from demseis.generator.survey import (damage_factor, fill_gaps, fine_depths, hold_small_steps,
-                                      labels_at_traces, on_grid, reference_points, substeps,
-                                      trace_spacing, trace_x)
+
+from demseis.generator.config.layout import on_grid, sample_shape, trace_spacing, trace_x
+from demseis.generator.config.settings import parse_config
+from demseis.generator.render.survey import (damage_factor, fill_gaps, fine_depths,
+                                             hold_small_steps, labels_at_traces, reference_points,
+                                             substeps)
 from demseis.seismic import coarse_velocity, interface_times
 
 
@@ -134,7 +135,7 @@ def test_hold_small_steps_drops_drifts_below_the_tolerance_only():
 def test_rock_time_window_is_the_height_at_the_fastest_vp_and_every_column_fills_it(tmp_path):
     import demseis
     from demseis.errors import ConfigError
-    from demseis.generator.layout import time_axis_of
+    from demseis.generator.config.layout import time_axis_of
 
     whole = _cfg(domain="time", dt_s=0.004)
     rock = _cfg(domain="time", dt_s=0.004, time_window="rock")

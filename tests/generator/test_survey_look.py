@@ -7,7 +7,7 @@ import numpy as np
 
 import demseis
 from demseis.datasets import validate_store
-from demseis.generator.config import load_config
+from demseis.generator.config.settings import load_config
 
 
 def _config() -> dict:

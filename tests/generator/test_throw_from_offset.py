@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from demseis.errors import ConfigError
-from demseis.generator.config import load_config, parse_config
+from demseis.generator.config.sampling import plan_run
+from demseis.generator.config.settings import load_config, parse_config
 from demseis.generator.engines.planar import planar_model, reflectivity_strata
-from demseis.generator.sampling import plan_run
 
 THROW_M = 60.0
 
@@ -26,7 +26,7 @@ def _cfg(**labels):
 def _final_fault(cfg, run):
     """The final snapshot's ``fault`` array of ``run`` and the fault's throw in samples there
     (the planar engine's Vp is constant: 2 throw / (vp dt))."""
-    from demseis.generator.pipeline import run_shard
+    from demseis.generator.sweep.pipeline import run_shard
 
     shard = run_shard(cfg, run)
     i = int(np.flatnonzero(shard.params["snapshot"] == cfg.model.n_snapshots - 1)[0])

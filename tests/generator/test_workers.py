@@ -1,4 +1,4 @@
-"""How the sweep starts its local workers (demseis.generator.workers): forked from a forkserver
+"""How the sweep starts its local workers (demseis.generator.sweep.workers): forked from a forkserver
 that has loaded the kernels, or spawned; either way the same bytes."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import sys
 import pytest
 
 from demseis.errors import InputError
-from demseis.generator.workers import worker_start_method
+from demseis.generator.sweep.workers import worker_start_method
 from tests._helpers import ROOT
 from tests.generator._helpers import assert_same_bytes
 
@@ -50,7 +50,7 @@ def test_unknown_method_from_the_cli_exits_2(tmp_path):
 def test_forked_workers_start_with_the_kernels_loaded(monkeypatch):
     """A forked worker has every kernel of a run loaded before its first task (the preload);
     a spawned one has none, and would load them in its first task."""
-    from demseis.generator.sweep import SweepSummary, _start_local_cluster
+    from demseis.generator.sweep.driver import SweepSummary, _start_local_cluster
 
     def loaded_signatures() -> dict[str, int]:
         import sys as worker_sys

@@ -11,19 +11,13 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from demseis.generator.config import load_config
-from demseis.generator.engines import get_engine
-from demseis.generator.layout import grid_of
-from demseis.generator.sampling import plan_run
-from demseis.labels import (
-    displacement_history,
-    label_maps,
-    loop_count,
-    rung_fraction,
-    sample_facts,
-    strain_history,
-)
 from demseis.diagnostics.coverage import jump_coverage, jump_field
+from demseis.generator.config.layout import grid_of
+from demseis.generator.config.sampling import plan_run
+from demseis.generator.config.settings import load_config
+from demseis.generator.engines import get_engine
+from demseis.labels import (displacement_history, label_maps, loop_count, rung_fraction,
+                            sample_facts, strain_history)
 
 
 @pytest.fixture(scope="module")

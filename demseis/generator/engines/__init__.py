@@ -12,7 +12,7 @@ that parameter are its names, and nothing outside an engine tests an engine's na
 - ``"planar"`` (:mod:`demseis.generator.engines.planar`): the published FaultSeg recipe as a
   control (random reflectivity, folds, planar shear, planar faults); no particles.
 
-The path from an engine to a store (:func:`demseis.generator.pipeline.run_shard`)::
+The path from an engine to a store (:func:`demseis.generator.sweep.pipeline.run_shard`)::
 
     engine = get_engine(cfg.model.engine)
     run = engine.simulate(cfg, spec)                      # EngineRun
@@ -25,17 +25,17 @@ A new engine is one registration (``ENGINES.register("name", engine)``), after w
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping, Sequence
 import dataclasses
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from demseis.errors import InputError
-from demseis.generator.config import Config
-from demseis.generator.runsetup import RunInfo, run_info
-from demseis.generator.sampling import RunSpec
+from demseis.generator.config.sampling import RunSpec
+from demseis.generator.config.settings import Config
+from demseis.generator.engines.runsetup import RunInfo, run_info
 from demseis.registry import ENGINES
 from demseis.types import Snapshot
 
@@ -48,7 +48,7 @@ class State:
     ----------
     snapshot : snapshot index (0 = the undeformed reference).
     vp_m_s, rho_kg_m3 : (nz, nx) float64 Vp and density on the sweep's depth grid
-        (:func:`demseis.generator.layout.grid_of`), row 0 at the top.
+        (:func:`demseis.generator.config.layout.grid_of`), row 0 at the top.
     labels : (nz, nx) depth-grid map of every label the engine makes
         (:func:`demseis.schema.engine_labels`: ``fault``, ``damage``, ``strain``, ``layer``,
         ``fault_id``, ``slip_m``, ``dip_deg``, ``sense``), with the schema's dtypes.

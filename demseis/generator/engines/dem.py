@@ -25,19 +25,21 @@ from typing import Any
 
 import numpy as np
 
-from demseis.errors import ConfigError, SimulationError
-from demseis.dem import Material, NormalFault, Pack, build_assembly, settle_pack, simulate, time_step
+from demseis.dem import (Material, NormalFault, Pack, build_assembly, settle_pack, simulate,
+                         time_step)
 from demseis.dem.reference import reference_map
 from demseis.dem.strata import layer_materials
-from demseis.generator.config import Config
+from demseis.errors import ConfigError, SimulationError
+from demseis.generator.config.layout import grid_of
+from demseis.generator.config.params import DistSpec, Fixed, spec_values_hint
+from demseis.generator.config.sampling import (SEED_DEM, SEED_LAYERS, SEED_PACK, SEED_PROPERTIES,
+                                               RunSpec, rng_at)
+from demseis.generator.config.settings import Config
 from demseis.generator.engines import EngineRun, State
-from demseis.generator.layout import grid_of
-from demseis.generator.params import DistSpec, Fixed, spec_values_hint
-from demseis.generator.physics import check_physics
-from demseis.generator.runsetup import (RunInfo, fault_system_of, layer_thicknesses, material_of,
-                                        property_model_of, run_info, run_properties, run_strata)
-from demseis.generator.sampling import (SEED_DEM, SEED_LAYERS, SEED_PACK, SEED_PROPERTIES,
-                                        RunSpec, rng_at)
+from demseis.generator.engines.physics import check_physics
+from demseis.generator.engines.runsetup import (RunInfo, fault_system_of, layer_thicknesses,
+                                                material_of, property_model_of, run_info,
+                                                run_properties, run_strata)
 from demseis.labels import displacement_history, label_maps, strain_history
 from demseis.parameters import MATERIAL_FIELDS, PARAMS
 from demseis.registry import LABEL_METHODS, RENDERINGS
@@ -67,7 +69,7 @@ class DemEngine:
 
     def check(self, cfg: Config) -> None:
         """Elements fit the box and the layers, and the DEM's physical sanity rules
-        (:func:`demseis.generator.physics.check_physics`) hold."""
+        (:func:`demseis.generator.engines.physics.check_physics`) hold."""
         m = cfg.model
         if m.radius_max_m * 8 > min(m.width_m, m.height_m):
             raise ConfigError(

@@ -4,7 +4,7 @@ A run is a stack of random layers (thicknesses Gamma-distributed with ``layer_th
 rock from the run's :class:`~demseis.seismic.PropertyModel`), optionally folded
 (``fold_amplitude_m``, ``fold_kind``), cut by the faults of the run's basement system (the same
 ``structure``, ``n_faults``, ``fault_kind``, ``dip_deg``, ``throw_m``, ``dip_direction``,
-``listric_radius_m`` draws as the DEM engine's, :func:`demseis.generator.runsetup.run_info`).
+``listric_radius_m`` draws as the DEM engine's, :func:`demseis.generator.engines.runsetup.run_info`).
 
 Faulting is geometry. Fault ``k`` meets the base of the model at ``x_m`` and rises towards the
 footwall: planar at ``dip_deg``, or listric (a circular arc of radius ``listric_radius_m``,
@@ -22,7 +22,7 @@ the DEM's stretching base.
 Snapshot ``k`` of ``n_snapshots`` holds the fraction ``k / (n - 1)`` of every throw, so a run
 has the same samples as a DEM run. Each snapshot is a
 :class:`~demseis.generator.engines.State` whose properties and labels go through the imaging,
-noise and storage every engine shares (:mod:`demseis.generator.render`):
+noise and storage every engine shares (:mod:`demseis.generator.render.section`):
 
 - ``fault`` cells lie within ``max(thickness_cells, 1) / 2`` cells (perpendicular) of a fault
   where its throw is > 0; ``damage`` is 2 there and 1 within three times that distance;
@@ -49,12 +49,12 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import gaussian_filter
 
-from demseis.generator.config import Config
+from demseis.generator.config.layout import grid_of
+from demseis.generator.config.sampling import (SEED_DEM, SEED_LAYERS, SEED_POPULATION,
+                                               SEED_PROPERTIES, RunSpec, rng_at)
+from demseis.generator.config.settings import Config
 from demseis.generator.engines import EngineRun, State
-from demseis.generator.layout import grid_of
-from demseis.generator.runsetup import RunInfo, property_model_of, run_info, run_strata
-from demseis.generator.sampling import (SEED_DEM, SEED_LAYERS, SEED_POPULATION, SEED_PROPERTIES,
-                                       RunSpec, rng_at)
+from demseis.generator.engines.runsetup import RunInfo, property_model_of, run_info, run_strata
 from demseis.registry import RENDERINGS
 from demseis.schema import engine_labels, sample_array
 from demseis.seismic import LayerProperties, Strata, draw_layer_properties

@@ -69,16 +69,16 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
+from demseis.dem import FaultSystem
 from demseis.errors import ConfigError
-from demseis.generator.config import Config
+from demseis.generator.config.layout import grid_of, param_codes
+from demseis.generator.config.params import spec_values_hint
+from demseis.generator.config.sampling import (SEED_DEM, SEED_PROPERTIES, SEED_STRATA, RunSpec,
+                                               rng_at)
+from demseis.generator.config.settings import Config
 from demseis.generator.engines import EngineRun, State
 from demseis.generator.engines.kinematic import draw_fault_labels
-from demseis.generator.layout import grid_of, param_codes
-from demseis.generator.params import spec_values_hint
-from demseis.generator.runsetup import ABSENT, RunInfo, bed_model_of, property_model_of
-from demseis.generator.sampling import (SEED_DEM, SEED_PROPERTIES, SEED_STRATA, RunSpec,
-                                       rng_at)
-from demseis.dem import FaultSystem
+from demseis.generator.engines.runsetup import ABSENT, RunInfo, bed_model_of, property_model_of
 from demseis.parameters import MAX_BASEMENT_FAULTS
 from demseis.schema import engine_labels, sample_array
 from demseis.seismic import Strata, draw_layer_properties, strata_properties

@@ -1,7 +1,7 @@
 """One run → all of its labelled samples (one shard): the one path from an engine to a store.
 
 ``run_shard`` looks up the config's engine (:mod:`demseis.generator.engines`), runs it, and
-renders its states (:mod:`demseis.generator.render`); the sweep writes the result as the run's
+renders its states (:mod:`demseis.generator.render.section`); the sweep writes the result as the run's
 shard. Re-rendering (``demseis render`` / ``relabel``) takes the same path from stored particle
 snapshots instead of a new simulation.
 """
@@ -11,10 +11,10 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from demseis.generator.config import Config
+from demseis.generator.config.sampling import plan_run
+from demseis.generator.config.settings import Config
 from demseis.generator.engines import get_engine
-from demseis.generator.render import ShardData, render_run
-from demseis.generator.sampling import plan_run
+from demseis.generator.render.section import ShardData, render_run
 
 
 def run_shard(cfg: Config, run: int, progress: Callable[[float], None] | None = None, *,

@@ -41,10 +41,10 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from demseis.generator import _survey_kernels as _k
-from demseis.generator.config import Config
+from demseis.generator.config.layout import grid_of, on_grid, trace_spacing, trace_x
+from demseis.generator.config.settings import Config
+from demseis.generator.render import _survey_kernels as _k
 from demseis.seismic import depth_to_time
-from demseis.types import Grid
 
 #: relative change of Vp and density down a trace below which no reflection is made
 HOLD_TOL = 1e-4
@@ -52,35 +52,11 @@ HOLD_TOL = 1e-4
 _FAULT_PRIORITY = 4
 
 
-def _grid(cfg: Config) -> Grid:
-    """The sweep's raster grid (as :func:`demseis.generator.layout.grid_of`, which imports this
-    module)."""
-    return Grid.covering(cfg.model.width_m, cfg.model.height_m, cfg.grid.cell_m)
-
-
-def trace_spacing(cfg: Config) -> float:
-    """The distance between output traces (m): ``[output] trace_spacing_m``, or the cell."""
-    dx = float(cfg.output.trace_spacing_m)
-    return dx if dx > 0 else float(cfg.grid.cell_m)
-
-
-def on_grid(cfg: Config) -> bool:
-    """Whether the traces are the grid's columns (no lateral resampling)."""
-    return float(cfg.output.trace_spacing_m) in (0.0, float(cfg.grid.cell_m))
-
-
-def trace_x(cfg: Config) -> np.ndarray:
-    """(ntr,) x (m) of the traces: ``(j + 0.5) dx`` for every trace inside the model width."""
-    dx = trace_spacing(cfg)
-    n = max(1, int(math.floor(cfg.model.width_m / dx + 1e-9)))
-    return (np.arange(n) + 0.5) * dx
-
-
 def footprint_columns(cfg: Config) -> list[np.ndarray]:
     """Per trace, the grid columns whose centres lie in its footprint (the nearest column when
     none does: traces closer than the cells)."""
     cell = float(cfg.grid.cell_m)
-    nx = _grid(cfg).nx
+    nx = grid_of(cfg).nx
     dx = trace_spacing(cfg)
     centres = (np.arange(nx) + 0.5) * cell
     out = []
@@ -95,7 +71,7 @@ def footprint_columns(cfg: Config) -> list[np.ndarray]:
 def nearest_columns(cfg: Config) -> np.ndarray:
     """(ntr,) the grid column under each trace."""
     cell = float(cfg.grid.cell_m)
-    return np.minimum(_grid(cfg).nx - 1, (trace_x(cfg) // cell).astype(np.int64))
+    return np.minimum(grid_of(cfg).nx - 1, (trace_x(cfg) // cell).astype(np.int64))
 
 
 def labels_at_traces(cfg: Config, maps: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:

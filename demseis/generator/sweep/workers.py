@@ -2,7 +2,7 @@
 
 Where the platform has it (Linux, macOS), the workers are forked from multiprocessing's
 *forkserver*, a process that has first imported dask's worker machinery and demseis and loaded
-every Numba kernel (:mod:`demseis.generator._forkserver_preload`). A spawned worker instead
+every Numba kernel (:mod:`demseis.generator.sweep._forkserver_preload`). A spawned worker instead
 imports all of it itself (~0.8 s of CPU) and loads the kernels in its first task (~0.7 s): on a
 machine with as many workers as cores that CPU is taken from the other workers' tasks. A forked
 worker also exits without the interpreter's shut-down of Numba and LLVM, so closing the cluster
@@ -79,7 +79,7 @@ def start_forkserver() -> None:
         return
     set_worker_env()
     multiprocessing.get_context("forkserver").set_forkserver_preload(
-        ["demseis.generator._forkserver_preload"])
+        ["demseis.generator.sweep._forkserver_preload"])
     with sigint_ignored(), main_module_hidden():
         multiprocessing.forkserver.ensure_running()
 

@@ -1,4 +1,4 @@
-"""Numba kernels of :mod:`demseis.generator.survey` (plain arrays in, plain arrays out)."""
+"""Numba kernels of :mod:`demseis.generator.render.survey` (plain arrays in, plain arrays out)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ def interpolate_reference(rows, depth, x0c, y0c, unitc, jump_m, x0, y0, unit):
     """Fill (nz, nx) ``x0, y0, unit`` from the maps evaluated at ``rows`` (ascending, first 0,
     last nz - 1): linear between two evaluated rows whose reference y differ by their depth
     difference within ``jump_m`` and whose units agree, else the nearer row's map moved by the
-    depth between them (see :func:`demseis.generator.survey.reference_points`)."""
+    depth between them (see :func:`demseis.generator.render.survey.reference_points`)."""
     nz, nx = x0.shape
     k = 0
     for i in range(nz):

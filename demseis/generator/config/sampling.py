@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from demseis.generator.config import Config, _cross
-from demseis.generator.params import DistSpec, Fixed, GridSpec
+from demseis.generator.config.params import DistSpec, Fixed, GridSpec
+from demseis.generator.config.settings import Config, _cross
 from demseis.parameters import SCENARIO
 from demseis.seismic.wavelet import Wavelet
 

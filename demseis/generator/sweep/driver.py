@@ -26,35 +26,22 @@ import numpy as np
 from tqdm import tqdm
 
 from demseis import interrupts
-from demseis.datasets import (
-    ParamSpec,
-    create_store,
-    finalize_store,
-    read_store_attrs,
-    record_failures,
-    remove_partial_writes,
-    shard_status,
-    write_shard,
-    writer_lock,
-)
+from demseis.datasets import (ParamSpec, create_store, finalize_store, read_store_attrs,
+                              record_failures, remove_partial_writes, shard_status, write_shard,
+                              writer_lock)
 from demseis.datasets.index import update_index
 from demseis.datasets.layout import root_metadata_lost
 from demseis.datasets.lock import pid_alive
 from demseis.errors import ConfigError, InputError, SimulationError, StoreError
-from demseis.generator.config import Config, load_config, parse_config
-from demseis.generator.params import _json_value
+from demseis.generator.config.layout import (array_dtypes, grid_of, on_grid, param_codes,
+                                             param_dtypes, sample_shape, trace_spacing)
+from demseis.generator.config.params import _json_value
+from demseis.generator.config.sampling import run_params
+from demseis.generator.config.settings import Config, load_config, parse_config
 from demseis.generator.engines import get_engine
-from demseis.generator.layout import array_dtypes, grid_of, param_codes, param_dtypes, sample_shape
-from demseis.generator.pipeline import run_shard
-from demseis.generator.sampling import run_params
-from demseis.generator.survey import on_grid, trace_spacing
-from demseis.generator.workers import (
-    main_module_hidden,
-    set_worker_env,
-    sigint_ignored,
-    start_forkserver,
-    worker_start_method,
-)
+from demseis.generator.sweep.pipeline import run_shard
+from demseis.generator.sweep.workers import (main_module_hidden, set_worker_env, sigint_ignored,
+                                             start_forkserver, worker_start_method)
 from demseis.parameters import PARAMS, SCENARIO, STORED
 
 # dask and distributed (and psutil, which comes with them) are imported inside the functions
@@ -319,7 +306,7 @@ def warm_numba_cache() -> None:
     """
     raw_cfg = load_config(preset="tiny").to_dict()
     raw_cfg["sweep"].update(n_runs=1, n_layers=2, throw_m=20.0, dip_deg=60.0)
-    # 1 m/s: the run outlasts one damping relaxation time (demseis.generator.physics)
+    # 1 m/s: the run outlasts one damping relaxation time (demseis.generator.engines.physics)
     raw_cfg["model"].update(n_snapshots=2, width_m=300.0, height_m=200.0, wall_speed_m_s=1.0)
     run_shard(parse_config(raw_cfg), 0)
 
@@ -504,7 +491,7 @@ def _run_distributed(store: str, cfg: Config, pending: list[int], summary: Sweep
             client = remote
         else:
             # the caller's __main__ stays hidden while the cluster lives: dask restarts a
-            # crashed worker in a new process (demseis.generator.workers)
+            # crashed worker in a new process (demseis.generator.sweep.workers)
             hidden.enter_context(main_module_hidden())
             client, cluster = _start_local_cluster(summary, workers, retries)
         summary.phase_seconds["start"] = time.perf_counter() - t_start
@@ -627,7 +614,7 @@ QUIET_DASK = {
 def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: int) -> tuple[Any, Any]:
     """A LocalCluster of single-threaded worker processes and its client, the Numba cache warm.
 
-    With the forkserver (:func:`demseis.generator.workers.worker_start_method`), the server warms
+    With the forkserver (:func:`demseis.generator.sweep.workers.worker_start_method`), the server warms
     the cache once before it forks any worker. With spawn, the cache is warmed in a thread of
     the driver while the worker processes start: tasks are submitted only after both, so no
     worker compiles a kernel the driver is compiling.
@@ -636,7 +623,7 @@ def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: in
     import dask
     from distributed import Client, LocalCluster
 
-    from demseis.generator._worker import IgnoreSigint
+    from demseis.generator.sweep._worker import IgnoreSigint
 
     warm_errors: list[BaseException] = []
 

@@ -33,14 +33,8 @@ from pathlib import Path
 from typing import Any
 
 from demseis.errors import ConfigError, InputError
-from demseis.generator.params import (
-    DistSpec,
-    Fixed,
-    GridSpec,
-    Spec,
-    parse_spec,
-    spec_values_hint,
-)
+from demseis.generator.config.params import (DistSpec, Fixed, GridSpec, Spec, parse_spec,
+                                             spec_values_hint)
 from demseis.labels import LabelConfig
 from demseis.parameters import BED_FIELDS, PARAMS, PROPERTY_FIELDS, SCENARIO, Param
 from demseis.registry import ENGINES, RENDERINGS, load_plugins

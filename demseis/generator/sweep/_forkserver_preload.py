@@ -3,7 +3,7 @@
 What every worker process would otherwise do by itself before its first task is done here once:
 import dask's worker machinery and demseis, and load every Numba kernel from the on-disk cache
 (compiling it if the cache is cold). Each worker forked from this process inherits all of it.
-See :mod:`demseis.generator.workers` for why and what it saves.
+See :mod:`demseis.generator.sweep.workers` for why and what it saves.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import distributed.nanny  # noqa: F401  (the worker process's own imports)
 import distributed.worker  # noqa: F401
 
-from demseis.generator.sweep import shard_task, warm_numba_cache  # noqa: F401
+from demseis.generator.sweep.driver import shard_task, warm_numba_cache  # noqa: F401
 
 try:
     warm_numba_cache()

@@ -9,23 +9,15 @@ from typing import Any
 
 import numpy as np
 
-from demseis.datasets import (
-    finalize_store,
-    open_store,
-    read_done_params,
-    read_particles,
-    record_failures,
-    shard_status,
-    write_shard,
-    writer_lock,
-)
 from demseis import interrupts
+from demseis.datasets import (finalize_store, open_store, read_done_params, read_particles,
+                              record_failures, shard_status, write_shard, writer_lock)
 from demseis.errors import StoreError
-from demseis.generator.config import Config, stored_config
+from demseis.generator.config.sampling import plan_run
+from demseis.generator.config.settings import Config, stored_config
 from demseis.generator.engines import get_engine, require_particles, run_from_particles
-from demseis.generator.render import render_run
-from demseis.generator.sampling import plan_run
-from demseis.generator.sweep import SweepSummary, _progress_bar, prepare_store
+from demseis.generator.render.section import render_run
+from demseis.generator.sweep.driver import SweepSummary, _progress_bar, prepare_store
 from demseis.labels import LabelConfig
 
 

@@ -17,13 +17,13 @@ from demseis.dem import BasementFault, FaultSystem, Material, NormalFault
 from demseis.dem.basement import draw_fault_system
 from demseis.dem.fault import as_system
 from demseis.errors import ConfigError
-from demseis.generator.config import Config
-from demseis.generator.layout import param_codes
-from demseis.generator.sampling import (SEED_FAULTS, SEED_PROPERTIES, SEED_STRATA, rng_at,
-                                       seed_sequence)
+from demseis.generator.config.layout import param_codes
+from demseis.generator.config.sampling import (SEED_FAULTS, SEED_PROPERTIES, SEED_STRATA, rng_at,
+                                               seed_sequence)
+from demseis.generator.config.settings import Config
 from demseis.parameters import BED_FIELDS, MATERIAL_FIELDS, MAX_BASEMENT_FAULTS, PROPERTY_FIELDS
-from demseis.seismic import (BedModel, LayerProperties, PropertyModel, Strata, draw_layer_properties,
-                             draw_strata)
+from demseis.seismic import (BedModel, LayerProperties, PropertyModel, Strata,
+                             draw_layer_properties, draw_strata)
 
 #: value of every ``fault<k>_*`` record of a fault a run does not have (the store holds no
 #: NaN); kind and direction codes index the ``fault_kind`` and ``dip_direction`` choices.

@@ -16,16 +16,16 @@ from typing import Any
 import numpy as np
 
 from demseis.errors import InputError
-from demseis.generator.config import Config
+from demseis.generator.config.layout import (array_dtypes, grid_of, on_grid, param_codes,
+                                             param_dtypes, sample_shape, time_axis_of,
+                                             trace_spacing, trace_x)
+from demseis.generator.config.sampling import Render, RunSpec
+from demseis.generator.config.settings import Config
 from demseis.generator.engines import Engine, EngineRun, State
-from demseis.generator.layout import (array_dtypes, grid_of, param_codes, param_dtypes,
-                                      sample_shape, time_axis_of)
-from demseis.generator.runsetup import property_model_of
-from demseis.generator.sampling import Render, RunSpec
-from demseis.generator.survey import (damage_factor, fill_gaps, fine_depths, hold_small_steps,
-                                      labels_at_traces, nearest_columns, on_grid,
-                                      reference_points, substeps, to_time, trace_spacing,
-                                      trace_x)
+from demseis.generator.engines.runsetup import property_model_of
+from demseis.generator.render.survey import (damage_factor, fill_gaps, fine_depths,
+                                             hold_small_steps, labels_at_traces, nearest_columns,
+                                             reference_points, substeps, to_time)
 from demseis.labels import pick_faults, sample_facts, throw_samples
 from demseis.labels.offsets import jumps_to_samples, offset_faults, pair_jumps, window_max
 from demseis.registry import FAULT_STYLES, RENDERINGS
@@ -262,7 +262,7 @@ def _element_columns(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
 def _strata_columns(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
                     params: Mapping[str, Any]) -> ImagingInput:
     """``strata``: a fine stratigraphy looked up through the state's reference map
-    (:mod:`demseis.generator.survey`).
+    (:mod:`demseis.generator.render.survey`).
 
     Raises
     ------

@@ -1,17 +1,18 @@
 """What a sweep stores: its raster grid, sample shape, sample arrays and parameter arrays.
 
-Everything here is derived from a :class:`~demseis.generator.config.Config` and the
+Everything here is derived from a :class:`~demseis.generator.config.settings.Config` and the
 declarations on the ground floor: the sample arrays from :mod:`demseis.schema`, the
 per-sample parameters from :mod:`demseis.parameters` (``SCENARIO`` and ``STORED``).
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from demseis.generator.config import Config
-from demseis.generator.params import spec_values_hint
-from demseis.generator.survey import trace_x
+from demseis.generator.config.params import spec_values_hint
+from demseis.generator.config.settings import Config
 from demseis.parameters import SCENARIO, STORED
 from demseis.schema import SAMPLE_ARRAYS, stored_arrays
 from demseis.seismic import time_axis
@@ -36,6 +37,24 @@ def param_codes() -> dict[str, tuple[str, ...]]:
 def grid_of(cfg: Config) -> Grid:
     """The raster grid shared by every sample of a sweep."""
     return Grid.covering(cfg.model.width_m, cfg.model.height_m, cfg.grid.cell_m)
+
+
+def trace_spacing(cfg: Config) -> float:
+    """The distance between output traces (m): ``[output] trace_spacing_m``, or the cell."""
+    dx = float(cfg.output.trace_spacing_m)
+    return dx if dx > 0 else float(cfg.grid.cell_m)
+
+
+def on_grid(cfg: Config) -> bool:
+    """Whether the traces are the grid's columns (no lateral resampling)."""
+    return float(cfg.output.trace_spacing_m) in (0.0, float(cfg.grid.cell_m))
+
+
+def trace_x(cfg: Config) -> np.ndarray:
+    """(ntr,) x (m) of the traces: ``(j + 0.5) dx`` for every trace inside the model width."""
+    dx = trace_spacing(cfg)
+    n = max(1, int(math.floor(cfg.model.width_m / dx + 1e-9)))
+    return (np.arange(n) + 0.5) * dx
 
 
 def time_axis_of(cfg: Config) -> np.ndarray | None:
@@ -65,7 +84,7 @@ def time_axis_of(cfg: Config) -> np.ndarray | None:
 def sample_shape(cfg: Config) -> tuple[int, int]:
     """(H, W) of every stored sample: (grid rows or time samples, traces); the traces are the
     grid's columns unless ``[output] trace_spacing_m`` says otherwise
-    (:func:`demseis.generator.survey.trace_x`)."""
+    (:func:`trace_x`)."""
     grid = grid_of(cfg)
     t_s = time_axis_of(cfg)
     width = int(trace_x(cfg).size)

@@ -6,7 +6,7 @@ from collections import Counter
 from pathlib import Path
 
 from demseis.datasets import read_done_params, read_store_attrs
-from demseis.generator.layout import param_codes
+from demseis.generator.config.layout import param_codes
 
 #: fault records ``fault<k>_*`` looked for (a store holds as many as its config allows)
 _MAX_FAULTS = 64

@@ -34,7 +34,7 @@ import math
 from typing import Any
 
 from demseis.errors import ConfigError
-from demseis.generator.params import Fixed, GridSpec, spec_values_hint
+from demseis.generator.config.params import Fixed, GridSpec, spec_values_hint
 
 #: largest wall speed as a fraction of the p-wave speed 2 sqrt(Kn / (πρ)) (rule 1)
 MAX_WALL_MACH = 1.0e-2
@@ -50,7 +50,7 @@ def p_wave_speed_m_s(kn_n_m: float, density_kg_m3: float) -> float:
 def check_physics(cfg: Any) -> None:
     """Raise :class:`ConfigError` with the reason if ``cfg`` cannot make a quasi-static fault.
 
-    ``cfg`` is a :class:`demseis.generator.config.Config`; see the module docstring for the rules.
+    ``cfg`` is a :class:`demseis.generator.config.settings.Config`; see the module docstring for the rules.
     """
     def rng_of(key: str) -> tuple[float, float]:
         lo, hi = spec_values_hint(cfg.sweep.params[key])

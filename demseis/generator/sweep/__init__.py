@@ -1,0 +1,1 @@
+"""The sweep that writes a store: driver, per-run pipeline, workers, re-rendering, summaries."""
