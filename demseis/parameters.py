@@ -508,6 +508,14 @@ STORED: tuple[Stored, ...] = (
 )
 
 
+#: per-sample columns of a store whose ``[output]`` sampling varies from run to run (only then:
+#: a store of one sampling keeps the table it had)
+SAMPLING_STORED: tuple[Stored, ...] = (
+    Stored("dt_s", "float32", "run", "s", "sample interval of the section (0: a depth section)"),
+    Stored("trace_spacing_m", "float32", "run", "m", "distance between the section's traces"),
+)
+
+
 def param(name: str) -> Param:
     """The declaration of ``name``; :class:`KeyError` naming the known ones."""
     try:
@@ -549,6 +557,11 @@ def markdown_table() -> str:
     lines += ["", "Stored per sample in the store's `params` table besides the run and sample parameters above:", "",
               "| name | dtype | level | unit | description |", "| --- | --- | --- | --- | --- |"]
     for s in STORED:
+        lines.append(f"| `{s.name}` | {s.dtype} | {s.level} | {s.unit} | {s.doc} |")
+    lines += ["", "Stored too where `[output] dt_s` or `trace_spacing_m` is given several values "
+              "(each run draws its own):", "",
+              "| name | dtype | level | unit | description |", "| --- | --- | --- | --- | --- |"]
+    for s in SAMPLING_STORED:
         lines.append(f"| `{s.name}` | {s.dtype} | {s.level} | {s.unit} | {s.doc} |")
     return "\n".join(lines) + "\n"
 

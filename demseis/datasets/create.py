@@ -357,12 +357,15 @@ def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.n
     Cell centres as :class:`demseis.types.Grid` defines them: ``x = x0_m + (j + 0.5)
     cell_m`` (``dx_m``, the trace spacing, where the store has it), depth below the top ``(i + 0.5) cell_m``; time-domain stores (``domain = "time"``)
     have rows ``twt = k dt_s`` (the axis of :func:`demseis.seismic.time_axis`). No coordinates
-    when the attr is absent or does not match the sample shape.
+    when the attr is absent or does not match the sample shape, or when the sampling varies
+    from sample to sample (``grid["sampling"]``: each sample's is in the parameter table).
     """
     if not isinstance(grid, Mapping):
         return "depth", {}
     time = grid.get("domain", "depth") == "time"
     row_dim = "twt" if time else "depth"
+    if grid.get("sampling"):
+        return row_dim, {}
     try:
         cell, nx = float(grid["cell_m"]), int(grid["nx"])
         x = float(grid["x0_m"]) + (np.arange(nx) + 0.5) * float(grid.get("dx_m", cell))

@@ -159,6 +159,11 @@ def export_segy(store: str | Path, sample: int, out: str | Path, overwrite: bool
     section, grid = read_section(store, sample)
     domain = grid.get("domain", "depth")
     dt_s = grid.get("dt_s")
+    if grid.get("sampling"):  # each sample its own sampling, in the parameter table
+        own = read_params(store).take(np.array([int(sample)]))
+        grid = {**grid, "dx_m": float(own["trace_spacing_m"][0])}
+        if domain == "time":
+            dt_s = float(own["dt_s"][0])
     if domain == "time" and (dt_s is None or not math.isfinite(float(dt_s))):
         raise StoreError("store grid says domain 'time' but has no valid 'dt_s'")
     dx = grid.get("dx_m")

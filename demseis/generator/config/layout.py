@@ -7,13 +7,15 @@ per-sample parameters from :mod:`demseis.parameters` (``SCENARIO`` and ``STORED`
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from typing import Any
 
 import numpy as np
 
-from demseis.generator.config.params import spec_values_hint
+from demseis.generator.config.params import spec_candidates, spec_values_hint
 from demseis.generator.config.settings import Config
-from demseis.parameters import SCENARIO, STORED
+from demseis.parameters import SAMPLING_STORED, SCENARIO, STORED
 from demseis.schema import SAMPLE_ARRAYS, stored_arrays
 from demseis.seismic import time_axis
 from demseis.types import Grid
@@ -81,14 +83,47 @@ def time_axis_of(cfg: Config) -> np.ndarray | None:
     return time_axis(grid.nz, grid.cell_m, vp_min, cfg.output.dt_s)
 
 
-def sample_shape(cfg: Config) -> tuple[int, int]:
-    """(H, W) of every stored sample: (grid rows or time samples, traces); the traces are the
-    grid's columns unless ``[output] trace_spacing_m`` says otherwise
-    (:func:`trace_x`)."""
+def section_shape(cfg: Config) -> tuple[int, int]:
+    """(H, W) of a section rendered with ``cfg.output``'s sampling: (grid rows or time samples,
+    traces); the traces are the grid's columns unless ``[output] trace_spacing_m`` says
+    otherwise (:func:`trace_x`)."""
     grid = grid_of(cfg)
     t_s = time_axis_of(cfg)
     width = int(trace_x(cfg).size)
     return (grid.nz, width) if t_s is None else (int(t_s.size), width)
+
+
+def sample_shape(cfg: Config) -> tuple[int, int]:
+    """(H, W) of every stored sample. With one sampling per store, the section's shape
+    (:func:`section_shape`). Where ``[output] dt_s`` or ``trace_spacing_m`` varies from run to
+    run (:attr:`Config.sampling`), the smallest section any run can give (at the largest
+    ``dt_s`` and ``trace_spacing_m``): every run's section is cropped to it, never padded
+    (:func:`crop_to`)."""
+    if not cfg.sampling:
+        return section_shape(cfg)
+    shapes = [section_shape(dataclasses.replace(cfg, output=dataclasses.replace(cfg.output, **c)))
+              for c in _corners(cfg)]
+    return min(h for h, _ in shapes), min(w for _, w in shapes)
+
+
+def _corners(cfg: Config) -> list[dict[str, Any]]:
+    """Every combination of the extreme values of the varied sampling keys."""
+    combos: list[dict[str, Any]] = [{}]
+    for key, spec in cfg.sampling.items():
+        combos = [{**c, key: v} for c in combos for v in spec_candidates(spec)]
+    return combos
+
+
+def crop_to(section: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """``section`` (..., H, W) cut to ``shape`` (h, w) <= (H, W): the first ``h`` rows (from the
+    top of the model, or time zero) and the ``w`` middle traces (``(W - w) // 2`` dropped on
+    the left)."""
+    h, w = shape
+    H, W = section.shape[-2:]
+    if h > H or w > W:
+        raise ValueError(f"a section of {H} x {W} cannot be cropped to {h} x {w}")
+    left = (W - w) // 2
+    return section[..., :h, left:left + w]
 
 
 def array_dtypes(cfg: Config) -> dict[str, str]:
@@ -98,9 +133,13 @@ def array_dtypes(cfg: Config) -> dict[str, str]:
     return {name: SAMPLE_ARRAYS.get(name).dtype for name in stored_arrays(options)}
 
 
-def param_dtypes() -> dict[str, str]:
-    """Name → dtype of the per-sample parameter arrays (the columns of the store's ``params`` table)."""
+def param_dtypes(cfg: Config | None = None) -> dict[str, str]:
+    """Name → dtype of the per-sample parameter arrays (the columns of the store's ``params``
+    table); with ``cfg``, also the sampling of each sample where it varies from run to run
+    (:data:`demseis.parameters.SAMPLING_STORED`)."""
     out = {s.name: s.dtype for s in STORED}
+    if cfg is not None and cfg.sampling:
+        out.update({s.name: s.dtype for s in SAMPLING_STORED})
     codes = param_codes()
     for key, pdef in SCENARIO.items():
         if key in out:

@@ -177,6 +177,18 @@ def spec_from_json(pdef: Param, raw: Any, where: str) -> Spec:
     return parse_spec(pdef, raw, where)
 
 
+def spec_candidates(spec: Spec) -> tuple:
+    """The values a spec can give that bound what it can do: a fixed value, every value of a
+    list or a choice, the low and high of a continuous distribution."""
+    if isinstance(spec, Fixed):
+        return (spec.value,)
+    if isinstance(spec, GridSpec):
+        return spec.values
+    if spec.dist == "choice":
+        return spec.values
+    return tuple(v for v in (spec.low, spec.high) if v is not None)
+
+
 def spec_values_hint(spec: Spec) -> tuple[Any, Any] | None:
     """The (min, max) a numeric spec can produce, or None for strings and bools."""
     if isinstance(spec, Fixed):

@@ -13,12 +13,15 @@ Seed tree (spawn keys under the sweep seed; the second key is one of the named c
     (run, SEED_POPULATION)           the kinematic engine's fault population (``base_stretch``)
     (run, SEED_PACK)                 the order in which runs run .. run + K - 1 take the K packs
                                      of ``[model] pack_library`` (run a multiple of K)
+    (run, SEED_SAMPLING)             the run's section sampling (``[output] dt_s`` and
+                                     ``trace_spacing_m`` given as distributions)
 
 A run's values depend only on the sweep seed and the run index, never on worker count or order.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -39,6 +42,7 @@ SEED_FAULTS = 6
 SEED_STRATA = 7
 SEED_POPULATION = 8
 SEED_PACK = 9
+SEED_SAMPLING = 10
 
 
 def seed_sequence(cfg: Config, *key: int) -> np.random.SeedSequence:
@@ -116,18 +120,7 @@ def run_params(cfg: Config, run: int) -> dict[str, Any]:
     key order.
     """
     run_specs = {k: s for k, s in cfg.sweep.params.items() if SCENARIO[k].level == "run"}
-    combos = _cross(run_specs)
-    combo = combos[run % len(combos)]
-    rng = rng_at(cfg, run, SEED_RUN_PARAMS)
-    out: dict[str, Any] = {}
-    for key, spec in combo.items():
-        if isinstance(spec, Fixed):
-            out[key] = spec.value
-        elif isinstance(spec, DistSpec):
-            out[key] = spec.sample(rng)
-        else:
-            out[key] = spec
-    return out
+    return _draw(run_specs, run, rng_at(cfg, run, SEED_RUN_PARAMS))
 
 
 def plan_run(cfg: Config, run: int) -> RunSpec:
@@ -156,3 +149,30 @@ def plan_run(cfg: Config, run: int) -> RunSpec:
                 renders.append(Render(sample=sample, snapshot=snap, seed=noise_seed, values=vals))
                 sample += 1
     return RunSpec(run=run, params=run_params(cfg, run), renders=tuple(renders))
+
+
+def _draw(specs: dict[str, Any], run: int, rng: np.random.Generator) -> dict[str, Any]:
+    """Values of run ``run``: lists crossed (in key order) and cycled over the runs (run ``i``
+    takes combination ``i mod G``), distributions drawn from ``rng`` in key order."""
+    combos = _cross(specs)
+    out: dict[str, Any] = {}
+    for key, spec in combos[run % len(combos)].items():
+        if isinstance(spec, Fixed):
+            out[key] = spec.value
+        elif isinstance(spec, DistSpec):
+            out[key] = spec.sample(rng)
+        else:
+            out[key] = spec
+    return out
+
+
+def config_of_run(cfg: Config, run: int) -> Config:
+    """The config run ``run`` renders with: ``cfg`` with its ``[output]`` sampling keys
+    (:attr:`Config.sampling`) set to the run's values; ``cfg`` itself when the store has one
+    sampling. Lists cycle over the runs, distributions are drawn from node
+    ``(run, SEED_SAMPLING)``; the result keeps ``sampling``, so the store's shape and parameter
+    table (:mod:`demseis.generator.config.layout`) are the same for every run."""
+    if not cfg.sampling:
+        return cfg
+    values = _draw(cfg.sampling, run, rng_at(cfg, run, SEED_SAMPLING))
+    return dataclasses.replace(cfg, output=dataclasses.replace(cfg.output, **values))

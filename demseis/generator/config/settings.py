@@ -34,7 +34,7 @@ from typing import Any
 
 from demseis.errors import ConfigError, InputError
 from demseis.generator.config.params import (DistSpec, Fixed, GridSpec, Spec, parse_spec,
-                                             spec_values_hint)
+                                             spec_candidates, spec_values_hint)
 from demseis.labels import LabelConfig
 from demseis.parameters import BED_FIELDS, PARAMS, PROPERTY_FIELDS, SCENARIO, Param
 from demseis.registry import ENGINES, RENDERINGS, load_plugins
@@ -106,6 +106,11 @@ class Config:
     properties: dict[str, Any]
     #: plug-in modules imported before the config is read (demseis.registry.load_plugins)
     plugins: tuple[str, ...] = ()
+    #: the ``[output]`` sampling keys given a list or a distribution (:data:`SAMPLING_KEYS`),
+    #: drawn per run (:func:`demseis.generator.config.sampling.config_of_run`); empty when the
+    #: whole store has one sampling. ``output`` holds each one's nominal value (the first
+    #: listed, or the low end).
+    sampling: dict[str, Spec] = field(default_factory=dict)
 
     # ---- derived sizes -------------------------------------------------------------
     def render_grid(self) -> list[dict[str, Any]]:
@@ -137,7 +142,8 @@ class Config:
             },
             "model": self._model_dict(),
             "grid": dataclasses.asdict(self.grid),
-            "output": dataclasses.asdict(self.output),
+            "output": {**dataclasses.asdict(self.output),
+                       **{k: spec.to_json() for k, spec in self.sampling.items()}},
             "labels": dataclasses.asdict(self.labels),
             "properties": {k: list(v) if isinstance(v, tuple) else v
                            for k, v in self.properties.items()},
@@ -199,7 +205,7 @@ def _parse_table(raw: Any, defs: dict[str, Param], where: str) -> dict[str, Any]
         if isinstance(value, (list, dict)):
             raise ConfigError(
                 f"{where}.{key} = {value!r}: must be a single value (only [sweep] parameters "
-                "take lists or distributions)"
+                f"and [output] {', '.join(SAMPLING_KEYS)} take lists or distributions)"
             )
         out[key] = defs[key].check_value(value, f"{where}.{key}")
     return out
@@ -307,7 +313,7 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
             f"{model.radius_max_m:g}"
         )
     grid = GridSection(**_parse_table(raw.get("grid", {}), _GRID_DEFS, "grid"))
-    output = OutputSection(**_parse_table(raw.get("output", {}), _OUTPUT_DEFS, "output"))
+    output, sampling = _parse_output(raw.get("output", {}))
     labels = _dataclass_table(LabelConfig, raw.get("labels", {}), "labels")
 
     # non-scalar PropertyModel fields live in [properties]
@@ -328,9 +334,41 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
         properties.setdefault(key, getattr(prop_defaults, key))
 
     cfg = Config(name=name, sweep=sweep, model=model, grid=grid, output=output, labels=labels,
-                 properties=properties, plugins=plugins)
+                 properties=properties, plugins=plugins, sampling=sampling)
     _cross_checks(cfg)
     return cfg
+
+
+#: the ``[output]`` keys that take a list or a distribution, drawn per run: the sampling of
+#: the sections (one shape per store all the same, see :func:`demseis.generator.config.layout.sample_shape`)
+SAMPLING_KEYS = ("dt_s", "trace_spacing_m")
+
+
+def _parse_output(raw: Any) -> tuple[Any, dict[str, Spec]]:
+    """``[output]``: the section, and the specs of its :data:`SAMPLING_KEYS` given a list or a
+    distribution (a list or choice of one value is that value). The section holds the nominal
+    value of such a key: its first value, or the low end of its range."""
+    if not isinstance(raw, dict):
+        raise ConfigError(f"[output] must be a table, got {type(raw).__name__}")
+    if isinstance(raw.get("domain"), (list, dict)):
+        raise ConfigError(f"output.domain = {raw['domain']!r}: takes one value, 'depth' or 'time' "
+                          "(a store's sections share one vertical axis; write one store per "
+                          "domain)")
+    fixed = {k: v for k, v in raw.items() if k not in SAMPLING_KEYS or not isinstance(v, (list, dict))}
+    output = _parse_table(fixed, _OUTPUT_DEFS, "output")
+    sampling: dict[str, Spec] = {}
+    for key in SAMPLING_KEYS:
+        if key in fixed or key not in raw:
+            continue
+        spec = parse_spec(PARAMS[key], raw[key], f"output.{key}")
+        values = spec_candidates(spec)
+        if not isinstance(spec, DistSpec) or spec.dist == "choice":
+            if len(set(values)) == 1:
+                output[key] = values[0]
+                continue
+        sampling[key] = spec
+        output[key] = values[0]
+    return OutputSection(**output), sampling
 
 
 #: ``[output]`` keys added after stores were written, and the value that reproduces the bytes
@@ -369,15 +407,15 @@ def _cross_checks(cfg: Config) -> None:
     if cfg.grid.cell_m * 4 > min(cfg.model.width_m, cfg.model.height_m):
         raise ConfigError(f"grid.cell_m = {cfg.grid.cell_m:g} is too coarse for the model box")
     # a basement without faults deforms only through its stretching base
-    if ("none" in _spec_candidates(cfg.sweep.params["structure"])
-            and 0.0 in _spec_candidates(cfg.sweep.params["base_stretch"])):
+    if ("none" in spec_candidates(cfg.sweep.params["structure"])
+            and 0.0 in spec_candidates(cfg.sweep.params["base_stretch"])):
         raise ConfigError("sweep.structure = 'none' (no basement fault) needs sweep.base_stretch "
                           "!= 0, and base_stretch can be 0 in this sweep: nothing would deform "
                           "the model")
     # every extreme value of every property parameter must make a valid PropertyModel
     for key in PROPERTY_FIELDS:
         spec = cfg.sweep.params[key]
-        candidates = _spec_candidates(spec)
+        candidates = spec_candidates(spec)
         for value in candidates:
             try:
                 PropertyModel(**{**cfg.properties, key: value}).validate()
@@ -387,11 +425,15 @@ def _cross_checks(cfg: Config) -> None:
     fixed = {k: (s.value if isinstance(s, Fixed) else PARAMS[k].default)
              for k, s in ((k, cfg.sweep.params[k]) for k in BED_FIELDS)}
     for key in BED_FIELDS:
-        for value in _spec_candidates(cfg.sweep.params[key]):
+        for value in spec_candidates(cfg.sweep.params[key]):
             try:
                 BedModel(**{**fixed, key: value}).validate()
             except ConfigError as exc:  # BedModel names its fields strata.<name>
                 raise ConfigError(str(exc).replace("strata.", "sweep.")) from None
+    if "dt_s" in cfg.sampling and cfg.output.domain != "time":
+        raise ConfigError("output.dt_s is given several values, but output.domain = "
+                          f"{cfg.output.domain!r}: dt_s samples only time-domain sections (set "
+                          "[output] domain = 'time', or give dt_s one value)")
     # the engine's own rules (the DEM's: elements fit, a fault can form, quasi-static)
     engine = ENGINES.get(cfg.model.engine)
     rendering = RENDERINGS.get(cfg.output.rendering)
@@ -405,17 +447,6 @@ def _cross_checks(cfg: Config) -> None:
                           f"{cfg.output.rendering!r} has not: set [output] rendering = 'strata' "
                           "or labels.throw_from = 'slip'")
     engine.check(cfg)
-
-
-def _spec_candidates(spec: Spec) -> tuple:
-    if isinstance(spec, Fixed):
-        return (spec.value,)
-    if isinstance(spec, GridSpec):
-        return spec.values
-    if isinstance(spec, DistSpec) and spec.dist == "choice":
-        return spec.values
-    assert isinstance(spec, DistSpec)
-    return tuple(v for v in (spec.low, spec.high) if v is not None)
 
 
 def preset_path(name: str) -> Path:
@@ -446,13 +477,17 @@ def load_config(path: str | Path | None = None, *, preset: str | None = None) ->
     return parse_config(raw, source=str(path) if path else f"preset {preset or 'quick'}")
 
 
+#: the tables whose values may be distributions (tables themselves): merged key by key
+_SPEC_TABLES = ("sweep", "output")
+
+
 def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
     out = dict(base)
     for key, value in over.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict) and key != "sweep":
+        if isinstance(value, dict) and isinstance(out.get(key), dict) and key not in _SPEC_TABLES:
             out[key] = _merge(out[key], value)
-        elif key == "sweep" and isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = {**out[key], **value}
+        elif key in _SPEC_TABLES and isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = {**out[key], **value}  # a distribution replaces, never merges into, another
         else:
             out[key] = value
     return out

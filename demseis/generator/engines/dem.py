@@ -127,8 +127,8 @@ class DemEngine:
         material = material_of(p)
         thick = layer_thicknesses(cfg, int(p["n_layers"]), float(p["layer_thickness_cv"]),
                                   rng_at(cfg, spec.run, SEED_LAYERS))
-        info = run_info(cfg, p, spec.run)
         fault = fault_system_of(cfg, p, spec.run)
+        info = run_info(cfg, p, spec.run, basement=fault)
         rng = rng_at(cfg, spec.run, SEED_DEM)
         asm = build_assembly(
             cfg.model.width_m, cfg.model.height_m,

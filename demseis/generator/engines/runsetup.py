@@ -115,14 +115,16 @@ def fault_system_of(cfg: Config, params: dict[str, Any], run: int) -> NormalFaul
     return dataclasses.replace(system, speed_m_s=cfg.model.wall_speed_m_s)
 
 
-def run_info(cfg: Config, params: dict[str, Any], run: int) -> RunInfo:
+def run_info(cfg: Config, params: dict[str, Any], run: int,
+             basement: NormalFault | FaultSystem | None = None) -> RunInfo:
     """The basement of run ``run`` and its stored per-run values (see :class:`RunInfo`).
 
     ``fault_x_frac`` places a single basement fault where it meets the base of the model. The
     fault that grows through the cover is usually steeper than the basement fault (it is not
     imposed), so its trace at the surface lies on the footwall side of that point.
+    ``basement``: the run's :func:`fault_system_of`, where the caller has it already.
     """
-    system = as_system(fault_system_of(cfg, params, run))
+    system = as_system(basement if basement is not None else fault_system_of(cfg, params, run))
     codes = param_codes()
     m = system.faults[system.master] if system.faults else None
     values: dict[str, float] = {"fault_x_m": m.x_m if m else ABSENT,

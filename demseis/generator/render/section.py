@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 
 from demseis.errors import InputError
-from demseis.generator.config.layout import (array_dtypes, grid_of, on_grid, param_codes,
-                                             param_dtypes, sample_shape, time_axis_of,
-                                             trace_spacing, trace_x)
-from demseis.generator.config.sampling import Render, RunSpec
+from demseis.generator.config.layout import (array_dtypes, crop_to, grid_of, on_grid,
+                                             param_codes, param_dtypes, sample_shape,
+                                             section_shape, time_axis_of, trace_spacing, trace_x)
+from demseis.generator.config.sampling import Render, RunSpec, config_of_run
 from demseis.generator.config.settings import Config
 from demseis.generator.engines import Engine, EngineRun, State
 from demseis.generator.engines.runsetup import property_model_of
@@ -46,11 +46,14 @@ class ShardData:
     snapshots: list[Snapshot]
 
 
-def empty_shard(cfg: Config, spec: RunSpec) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
-    """Zeroed (S, H, W) sample arrays and (S,) parameter arrays of run ``spec``."""
+def empty_shard(cfg: Config, spec: RunSpec, shape: tuple[int, int] | None = None,
+                ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Zeroed (S, H, W) sample arrays (``shape``, default the store's) and (S,) parameter
+    arrays of run ``spec``."""
     S = len(spec.renders)
-    arrays = {k: np.zeros((S, *sample_shape(cfg)), dtype=v) for k, v in array_dtypes(cfg).items()}
-    params = {k: np.zeros(S, dtype=v) for k, v in param_dtypes().items()}
+    shape = sample_shape(cfg) if shape is None else shape
+    arrays = {k: np.zeros((S, *shape), dtype=v) for k, v in array_dtypes(cfg).items()}
+    params = {k: np.zeros(S, dtype=v) for k, v in param_dtypes(cfg).items()}
     return arrays, params
 
 
@@ -63,12 +66,23 @@ def renders_by_snapshot(spec: RunSpec) -> list[tuple[int, list[Render]]]:
 
 
 def render_run(cfg: Config, run: EngineRun, engine: Engine) -> ShardData:
-    """Every sample of ``run``: the states ``engine`` makes of its rendered snapshots, imaged."""
-    arrays, params = empty_shard(cfg, run.spec)
+    """Every sample of ``run``: the states ``engine`` makes of its rendered snapshots, imaged.
+
+    Where the store's sampling varies from run to run (:attr:`Config.sampling`), the run is
+    rendered at its own (:func:`config_of_run`), its sections cropped to the store's shape
+    (:func:`crop_to`) and its sampling stored with each sample (``dt_s``, 0 in depth, and
+    ``trace_spacing_m``)."""
+    rcfg = config_of_run(cfg, run.spec.run)
+    arrays, params = empty_shard(rcfg, run.spec, section_shape(rcfg))
     groups = renders_by_snapshot(run.spec)
     renders = dict(groups)
-    for state in engine.states(cfg, run, [k for k, _ in groups]):
-        render_state(cfg, run, renders[state.snapshot], state, arrays, params)
+    for state in engine.states(rcfg, run, [k for k, _ in groups]):
+        render_state(rcfg, run, renders[state.snapshot], state, arrays, params)
+    if cfg.sampling:
+        shape = sample_shape(cfg)
+        arrays = {k: np.ascontiguousarray(crop_to(v, shape)) for k, v in arrays.items()}
+        params["dt_s"][:] = rcfg.output.dt_s if rcfg.output.domain == "time" else 0.0
+        params["trace_spacing_m"][:] = trace_spacing(rcfg)
     return ShardData(arrays=arrays, params=params, snapshots=list(run.snapshots))
 
 

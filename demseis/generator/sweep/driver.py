@@ -42,7 +42,7 @@ from demseis.generator.engines import get_engine
 from demseis.generator.sweep.pipeline import run_shard
 from demseis.generator.sweep.workers import (main_module_hidden, set_worker_env, sigint_ignored,
                                              start_forkserver, worker_start_method)
-from demseis.parameters import PARAMS, SCENARIO, STORED
+from demseis.parameters import PARAMS, SAMPLING_STORED, SCENARIO, STORED
 
 # dask and distributed (and psutil, which comes with them) are imported inside the functions
 # that start or reach a cluster: ~1 s of imports that a sweep with --workers 0 never needs
@@ -130,6 +130,8 @@ def store_attrs(cfg: Config) -> dict[str, Any]:
     if cfg.output.domain == "time":
         grid_attrs["dt_s"] = cfg.output.dt_s
         grid_attrs["nt"] = sample_shape(cfg)[0]
+    if cfg.sampling:  # each run its own: dt_s and dx_m above are nominal, the table has each
+        grid_attrs["sampling"] = {k: spec.to_json() for k, spec in cfg.sampling.items()}
     return {
         "config": cfg.to_dict(),
         "grid": grid_attrs,
@@ -243,7 +245,7 @@ def _create(cfg: Config, out: Path, attrs: dict[str, Any], *, overwrite: bool) -
     """:func:`~demseis.datasets.create_store` of ``cfg`` at ``out``: a new store, or (an
     existing one, without ``overwrite``) its damaged metadata rewritten and its layout checked."""
     create_store(out, n_shards=cfg.sweep.n_runs, samples_per_shard=cfg.samples_per_run,
-                 shape=sample_shape(cfg), arrays=array_dtypes(cfg), params=store_param_specs(),
+                 shape=sample_shape(cfg), arrays=array_dtypes(cfg), params=store_param_specs(cfg),
                  attrs=attrs, overwrite=overwrite)
 
 
@@ -257,15 +259,15 @@ def _remove_orphan_creations(out: Path) -> None:
             shutil.rmtree(d, ignore_errors=True)
 
 
-def store_param_specs() -> dict[str, Any]:
-    """Per-sample parameters of the store with their declared unit and doc (demseis.parameters)
-    and, for the categorical ones, the names of their codes."""
+def store_param_specs(cfg: Config) -> dict[str, Any]:
+    """Per-sample parameters of the store of ``cfg`` with their declared unit and doc
+    (demseis.parameters) and, for the categorical ones, the names of their codes."""
     decl = {k: (p.unit, p.doc) for k, p in SCENARIO.items()}
-    decl.update({p.name: (p.unit, p.doc) for p in STORED})  # throw_m: the throw reached
+    decl.update({p.name: (p.unit, p.doc) for p in STORED + SAMPLING_STORED})  # throw_m: reached
     codes = param_codes()
     return {k: ParamSpec(v, long_name=decl[k][1], units=decl[k][0] or "1",
                          categories=codes.get(k))
-            for k, v in param_dtypes().items()}
+            for k, v in param_dtypes(cfg).items()}
 
 
 def shard_task(store: str, cfg_dict: dict[str, Any], shard: int) -> dict[str, Any]:
@@ -344,7 +346,9 @@ def dry_run_plan(cfg: Config, pending: int | None = None, why: str = "") -> list
         + (f"; {why}" if why else "") + f"); {what}",
         f"samples: {n_runs * S} ({cfg.model.n_snapshots} snapshots x "
         f"{cfg.renders_per_run_snapshot} renders per run)",
-        f"sample shape: {h} x {w} ({cfg.output.domain} domain; {grid.cell_m:g} m cells); arrays: "
+        f"sample shape: {h} x {w} ({cfg.output.domain} domain; {grid.cell_m:g} m cells"
+        + ("; " + ", ".join(sorted(cfg.sampling)) + " drawn per run, sections cropped to it"
+           if cfg.sampling else "") + "); arrays: "
         + ", ".join(f"{k} {v}" for k, v in array_dtypes(cfg).items()),
         f"size on disk: at most {human_bytes(n_runs * S * bytes_per_sample)} (uncompressed)"
         + (" plus particle snapshots" if engine.particles else ""),
