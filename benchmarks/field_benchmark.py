@@ -329,12 +329,41 @@ def stats(values) -> dict | None:
             "min": round(float(v.min()), 4), "max": round(float(v.max()), 4), "n": int(v.size)}
 
 
+def learning_curve_sets(tsets: dict, train_runs: list[int]) -> tuple[dict, dict[str, int]]:
+    """Each one-store training set ``NAME`` as ``NAME@N`` for every ``N`` of ``train_runs``:
+    (the new sets, name -> N)."""
+    from demseis.errors import InputError
+
+    out, limits = {}, {}
+    for name, (stores, weights) in tsets.items():
+        if len(stores) != 1:
+            raise InputError(f"--train-runs takes one-store training sets; {name!r} mixes "
+                             f"{len(stores)}")
+        for n in train_runs:
+            out[f"{name}@{n}"] = (stores, weights)
+            limits[f"{name}@{n}"] = int(n)
+    return out, limits
+
+
+def first_train_runs(store: str, fr: tuple[float, float, float], n: int) -> list[int]:
+    """The first ``n`` train runs of ``store`` (in run order) under the split ``fr``."""
+    from demseis.datasets import FaultSegDataset
+    from demseis.errors import InputError
+
+    runs = np.unique(FaultSegDataset(store, inputs=("seismic",), targets=("fault",),
+                                     split="train", split_fractions=fr).run_ids)
+    if not 0 < n <= runs.size:
+        raise InputError(f"--train-runs {n}: {store} has {runs.size} train runs")
+    return [int(r) for r in runs[:n]]
+
+
 def summary_line(name: str, cells: list[dict], items: dict, config: dict) -> dict:
     """The JSON line of one training set: every score's statistics over its seeds."""
     line = {"benchmark": "field_benchmark", "model": name, "stores": config["stores"],
             "weights": config["weights"],
             "seeds": sorted(c["seed"] for c in cells), **{k: config[k] for k in (
                 "steps", "base", "crop", "batch", "lr", "device")},
+            **({"train_runs": config["train_runs"]} if "train_runs" in config else {}),
             "machine": " | ".join(sorted({c.get("machine", config["machine"]) for c in cells})),
             "train_seconds": stats([c["train"]["seconds"] for c in cells]),
             "score_seconds": stats([c["score_seconds"] for c in cells if "score_seconds" in c]),
@@ -462,6 +491,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument("--tolerance", type=float, nargs="+", default=[3.0, 2.0],
                     help="matching distances (px)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
+    ap.add_argument("--train-runs", type=int, nargs="+", metavar="N",
+                    help="a learning curve: each one-store training set trains one model per N "
+                    "on its first N train runs (named NAME@N), the held-out runs unchanged")
     add_training_args(ap, 600, "held-out sections scored per store")
     ap.add_argument("--results", default="field_benchmark.json", help="accumulated results")
     ap.add_argument("--figure", help="PNG: one seed's predictions beside the masks")
@@ -494,11 +526,15 @@ def main(argv: list[str] | None = None) -> int:
     fsets = field_sets(args)
     trains = any((args.store, args.mix, args.planar, args.planar_steep, args.generate))
     tsets = training_sets(args, cache) if trains or not args.model else {}
+    limits: dict[str, int] = {}  # training set -> the train runs it uses (--train-runs)
+    if args.train_runs:
+        tsets, limits = learning_curve_sets(tsets, args.train_runs)
 
     # what every model is scored on: item key -> item; a key names its inputs
     items: dict[str, dict] = {}
     for store in dict.fromkeys(p for ps, _ in tsets.values() for p in ps):
-        name = next((n for n, (ps, _) in tsets.items() if ps == [store]), Path(store).stem)
+        name = next((n.split("@")[0] for n, (ps, _) in tsets.items() if ps == [store]),
+                    Path(store).stem)
         items[f"synthetic:{name}:{digest([store_id(store), fr, args.max_eval, tols])}"] = {
             "kind": "synthetic", "name": name, "store": store, "fr": fr,
             "max_eval": args.max_eval}
@@ -527,6 +563,10 @@ def main(argv: list[str] | None = None) -> int:
                   "base": base, "crop": args.crop, "batch": args.batch, "lr": args.lr,
                   "device": device.split(":")[0], "augment": True, "amp": cuda,
                   "test_fraction": args.test_fraction}
+        where = None
+        if name in limits:  # only then in the config: the fingerprints of full sets stay
+            config["train_runs"] = limits[name]
+            where = {"run_id": first_train_runs(stores[0], fr, limits[name])}
         fp = digest({k: v for k, v in config.items() if k != "stores"})
         results.setdefault("configs", {}).setdefault(fp, config)
         config["machine"] = machine(cuda, args.threads)
@@ -553,7 +593,8 @@ def main(argv: list[str] | None = None) -> int:
                 model, info = train_unet(stores, steps=steps, crop=args.crop, batch=args.batch,
                                          base=base, lr=args.lr, seed=seed, threads=args.threads,
                                          device=device, split_fractions=fr, log=None,
-                                         augment=True, amp=cuda, weights=weights)
+                                         augment=True, amp=cuda, weights=weights,
+                                         where=where)
                 torch.save(model.state_dict(), saved)
                 results["cells"] = [c for c in results["cells"]
                                     if not (c["config"] == fp and c["seed"] == seed)]

@@ -2,7 +2,7 @@
 paper's Figures 2-6), ``demseis plot`` (one stored sample) and :func:`plot_snapshots` (particle
 plots of DEM snapshots, like the paper's Figure 2).
 
-matplotlib is imported inside the functions that draw: it takes ~0.6 s to import, and the
+matplotlib is imported by :func:`_mpl` when a figure is drawn: it takes ~0.6 s to import, and the
 figures select the Agg backend when they are drawn, not when this module is imported (importing
 it must not switch the backend of an interactive session)."""
 
@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -30,6 +31,20 @@ from demseis.schema import sample_array
 from demseis.seismic import (element_properties, imaging_mode, property_grids, rasterise,
                              synthetic_sections)
 from demseis.types import Snapshot
+
+
+def _mpl() -> SimpleNamespace:
+    """matplotlib on the Agg backend, imported at the first figure (see the module docstring):
+    ``mpl`` (the package), ``plt`` (pyplot), ``EllipseCollection``, ``ListedColormap``."""
+    import matplotlib  # lazy: see the module docstring
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # lazy: see the module docstring
+    from matplotlib.collections import EllipseCollection  # lazy: see the module docstring
+    from matplotlib.colors import ListedColormap  # lazy: see the module docstring
+
+    return SimpleNamespace(mpl=matplotlib, plt=plt, EllipseCollection=EllipseCollection,
+                           ListedColormap=ListedColormap)
 
 
 def noise_title(snr_db: float, kind: str) -> str:
@@ -62,15 +77,13 @@ def _load_source(source: str, run: int) -> tuple[Config, list[Snapshot]]:
 
 def _draw_particles(ax: Any, snap: Snapshot, colors: np.ndarray, *, alpha_deposited: float = 0.45,
                     values: np.ndarray | None = None, cmap: str | None = None) -> Any:
-    from matplotlib.collections import EllipseCollection  # lazy: see the module docstring
-
     d = 2 * snap.radius
     kw: dict[str, Any] = {}
     if values is None:
         fc = colors.copy()
         fc[snap.deposited, 3] = alpha_deposited
         kw["facecolors"] = fc
-    coll = EllipseCollection(d, d, np.zeros_like(d), units="xy", offsets=snap.xy,
+    coll = _mpl().EllipseCollection(d, d, np.zeros_like(d), units="xy", offsets=snap.xy,
                              offset_transform=ax.transData, linewidths=0, **kw)
     if values is not None:
         coll.set_array(values)
@@ -82,9 +95,7 @@ def _draw_particles(ax: Any, snap: Snapshot, colors: np.ndarray, *, alpha_deposi
 
 def layer_colors(layer: np.ndarray, n_pre: int) -> np.ndarray:
     """RGBA per element: alternating warm/cool bands for pre-kinematic layers, greys for growth."""
-    import matplotlib  # lazy: see the module docstring
-
-    cmap = matplotlib.colormaps["tab20"]
+    cmap = _mpl().mpl.colormaps["tab20"]
     rgba = np.asarray(cmap((layer % 20) / 20.0))
     growth = layer >= n_pre
     rgba[growth, :3] = np.where((layer[growth] % 2)[:, None] == 0, 0.55, 0.8)
@@ -93,10 +104,7 @@ def layer_colors(layer: np.ndarray, n_pre: int) -> np.ndarray:
 
 def preview(source: str, out_dir: str | Path, *, run: int = 0) -> list[Path]:
     """Write the preview figures of run ``run`` of ``source`` into ``out_dir``; return the paths."""
-    import matplotlib  # lazy: see the module docstring
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # lazy: see the module docstring
+    plt = _mpl().plt
 
     cfg, snaps = _load_source(source, run)
     out = Path(out_dir)
@@ -214,10 +222,7 @@ def _deformation(p: dict) -> str:
 
 def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     """One stored sample: the section, its fault label over it, and the damage-zone map."""
-    import matplotlib  # lazy: see the module docstring
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # lazy: see the module docstring
+    plt = _mpl().plt
 
     root = open_store(store)
     n = root["seismic"].shape[0]
@@ -230,11 +235,13 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
     p = sample.params
     noise = p["noise_kind"]
     imaging = f", {imaging_mode(p['imaging']).title(p)}" if "imaging" in p else ""
-    w_m = grid["nx"] * grid.get("dx_m", grid["cell_m"])
-    if "twt" in root:            # a time section: rows are two-way-time samples
-        twt = np.asarray(root["twt"][:], dtype=np.float64)
-        dt = float(twt[1] - twt[0]) if twt.size > 1 else 1.0
-        extent = (0, w_m / 1000, float(twt[-1]) + dt, float(twt[0]))
+    # a store whose sampling varies from run to run holds each sample's own
+    dx = float(p["trace_spacing_m"]) if "trace_spacing_m" in p else grid.get("dx_m",
+                                                                              grid["cell_m"])
+    w_m = grid["nx"] * dx
+    if "twt" in root or grid.get("domain") == "time":  # rows are two-way-time samples
+        dt = float(p["dt_s"]) if "dt_s" in p else float(grid["dt_s"])
+        extent = (0, w_m / 1000, sec.shape[0] * dt, 0.0)
         aspect, y_label = "auto", "two-way time (s)"
         height_ratio = sec.shape[0] / sec.shape[1]
     else:
@@ -243,7 +250,7 @@ def plot_sample(store: str | Path, index: int, out: str | Path) -> Path:
         aspect, y_label = "equal", "depth (km)"
         height_ratio = h_m / w_m
     clip = float(np.percentile(np.abs(sec), 99)) or 1.0
-    from matplotlib.colors import ListedColormap  # lazy: see the module docstring
+    ListedColormap = _mpl().ListedColormap
 
     fig, axes = plt.subplots(1, 3, figsize=(16, 1.3 + 16 / 3 * height_ratio), sharey=True,
                              layout="constrained")
@@ -338,10 +345,7 @@ def plot_section(section: str | Path, out: str | Path, *, pred: str | Path | Non
         A file that cannot be read as a section or mask, or whose shape differs from the
         section's, or a threshold outside (0, 1).
     """
-    import matplotlib  # lazy: see the module docstring
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # lazy: see the module docstring
+    plt = _mpl().plt
 
     sec = _read_line(section, line, "section")
     # (title, what is drawn over the section, the probability it is drawn from; None: a mask)
@@ -408,11 +412,8 @@ def plot_snapshots(snaps: Sequence[Snapshot], path: str | os.PathLike, *, n_grou
     layers_per_group : layers sharing one colour (default: n_pre_kinematic_layers / 12).
     ncols : panels per row.
     """
-    import matplotlib  # lazy: see the module docstring
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # lazy: see the module docstring
-    from matplotlib.collections import EllipseCollection  # lazy: see the module docstring
+    mpl = _mpl()
+    plt, EllipseCollection = mpl.plt, mpl.EllipseCollection
 
     pre = snaps[0].layer[~snaps[0].deposited]
     n_layers = int(pre.max()) + 1 if pre.size else 1
@@ -459,10 +460,7 @@ def plot_realism(report: dict, out: str | Path, *, credit: str | None = None) ->
     (output samples), with the field targets as grey bands (10th-90th percentile or range)
     and dashed lines (median). ``credit`` (a data licence line) is printed under the figure.
     """
-    import matplotlib  # lazy: see the module docstring
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # lazy: see the module docstring
+    plt = _mpl().plt
 
     st, field, targets = report["store"], report.get("field"), report["targets"]
     fig, axes = plt.subplots(2, 4, figsize=(17, 8), layout="constrained")
@@ -480,7 +478,7 @@ def plot_realism(report: dict, out: str | Path, *, credit: str | None = None) ->
     ax = axes[0, 0]
     ax.imshow(sec, cmap="gray", vmin=-clip, vmax=clip, aspect="auto", interpolation="nearest")
     if "fault" in a:
-        from matplotlib.colors import ListedColormap  # lazy: see the module docstring
+        ListedColormap = _mpl().ListedColormap
 
         ax.imshow(np.ma.masked_not_equal(a["fault"], 1), cmap=ListedColormap(["red"]),
                   aspect="auto", interpolation="nearest", alpha=0.8)

@@ -219,3 +219,45 @@ def test_a_given_model_is_scored_without_training(bench, field, tmp_path, capsys
     scores = line["field"]["set"]["1"]
     assert 0.0 <= scores["ods_f1_tol3"] <= 1.0 and 0.0 <= scores["share_above_0.5"] <= 1.0
     assert set(line["f3"]) == {"1"} and "training " not in out.err
+
+
+def test_learning_curve_trains_on_the_first_train_runs(bench, field, tmp_path, capsys,
+                                                        monkeypatch):
+    """--train-runs: one model per N, each trained on the store's first N train runs only (the
+    runs handed to train_unet), all scored on the same held-out runs."""
+    import demseis.learning.train as train_mod
+    from demseis.datasets import FaultSegDataset
+    from tests.generator._helpers import generate_tiny
+
+    root, _ = field
+    store = generate_tiny(tmp_path, '[sweep]\nn_runs = 6\n[model]\nengine = "kinematic"\n',
+                          "kin")
+    capsys.readouterr()
+    fr = (0.5, 0.0, 0.5)
+    train = np.unique(FaultSegDataset(store, inputs=("seismic",), targets=("fault",),
+                                      split="train", split_fractions=fr).run_ids).tolist()
+    assert len(train) >= 2
+    assert bench["first_train_runs"](str(store), fr, 1) == train[:1]
+    with pytest.raises(InputError, match="--train-runs 99"):
+        bench["first_train_runs"](str(store), fr, 99)
+    seen = []
+    original = train_mod.train_unet
+
+    def spy(*a, **k):
+        seen.append(k["where"])
+        return original(*a, **k)
+
+    monkeypatch.setattr(train_mod, "train_unet", spy)
+    argv = ["--store", f"kin={store}", "--train-runs", "1", str(len(train)),
+            "--field-dir", str(root / "set"), "--seeds", "0", "--steps", "2", "--base", "4",
+            "--crop", "32", "--batch", "2", "--threads", "1", "--device", "cpu",
+            "--test-fraction", "0.5", "--max-eval", "4", "--field-scale", "1",
+            "--cache", str(tmp_path / "cache"), "--results", str(tmp_path / "fb.json")]
+    assert bench["main"](argv) == 0
+    lines = [json.loads(x) for x in capsys.readouterr().out.strip().splitlines()]
+    assert [(x["model"], x["train_runs"]) for x in lines] == [("kin@1", 1),
+                                                             (f"kin@{len(train)}", len(train))]
+    assert seen == [{"run_id": train[:1]}, {"run_id": train}]
+    assert lines[0]["synthetic"].keys() == lines[1]["synthetic"].keys() == {"kin"}
+    with pytest.raises(InputError, match="one-store training sets"):
+        bench["learning_curve_sets"]({"m": (["a", "b"], [1.0, 1.0])}, [1])
