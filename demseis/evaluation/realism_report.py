@@ -219,7 +219,9 @@ def store_measures(path, max_samples: int = 256, seed: int = 0) -> dict:
             t = throws_m(fault, a["slip_m"], a["dip_deg"])
             thr_m.append(t)
             if domain == "time":
-                if has["layer"]:
+                # a cropped section of its run's own dt (grid "sampling") does not span the
+                # model: no velocity from its rows, no throw in samples
+                if has["layer"] and not grid.get("sampling"):
                     v = _column_velocity(a["layer"], float(grid["nz"]) * cell_m, dt_s)
                     v_px = np.broadcast_to(v, fault.shape)[fault]
                     s_ok = np.isfinite(np.asarray(a["slip_m"], np.float64)[fault]) \
@@ -246,8 +248,9 @@ def store_measures(path, max_samples: int = 256, seed: int = 0) -> dict:
         "throw_m": _distribution(cat(thr_m)),
         "throw_samples": _distribution(cat(thr_s)),
     }
-    unit = (f"time samples of {dt_s * 1e3:g} ms" if domain == "time"
-            else f"depth cells of {cell_m:g} m")
+    unit = (f"depth cells of {cell_m:g} m" if domain != "time" else
+            "time samples (each run its own dt_s)" if grid.get("sampling")
+            else f"time samples of {dt_s * 1e3:g} ms")
     return {"path": str(store.path), "shape": [h, w], "domain": domain, "cell_m": cell_m,
             "dt_s": dt_s, "pixels": unit, "selection": selection,
             "seismic_samples": [int(i) for i in sei_idx],

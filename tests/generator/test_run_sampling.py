@@ -151,3 +151,16 @@ def test_a_sample_exported_to_segy_carries_its_own_sampling(tmp_path):
         out = export_segy(path, sample, tmp_path / f"s{sample}.sgy")
         with segyio.open(out, ignore_geometry=True) as f:
             assert math.isclose(segyio.tools.dt(f) / 1e6, dt)
+
+
+def test_realism_and_plot_of_a_store_whose_sampling_varies(tmp_path):
+    """The cropped sections do not span the model: no throw in samples from their rows; the
+    pixel unit says each run has its own dt; a plot draws it."""
+    from demseis.evaluation.realism_report import store_measures
+    from demseis.plotting import plot_sample
+
+    path = generate_tiny(tmp_path, VARIED, "varied")
+    got = store_measures(path)
+    assert got["pixels"] == "time samples (each run its own dt_s)"
+    assert got["measures"]["throw_samples"] is None and got["measures"]["throw_m"] is not None
+    assert plot_sample(path, 7, tmp_path / "p.png").stat().st_size > 0
