@@ -96,7 +96,7 @@ def section_shape(cfg: Config) -> tuple[int, int]:
 def sample_shape(cfg: Config) -> tuple[int, int]:
     """(H, W) of every stored sample. With one sampling per store, the section's shape
     (:func:`section_shape`). Where ``[output] dt_s`` or ``trace_spacing_m`` varies from run to
-    run (:attr:`Config.sampling`), the smallest section any run can give (at the largest
+    run (``Config.sampling``), the smallest section any run can give (at the largest
     ``dt_s`` and ``trace_spacing_m``): every run's section is cropped to it, never padded
     (:func:`crop_to`)."""
     if not cfg.sampling:

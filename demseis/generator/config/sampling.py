@@ -168,7 +168,7 @@ def _draw(specs: dict[str, Any], run: int, rng: np.random.Generator) -> dict[str
 
 def config_of_run(cfg: Config, run: int) -> Config:
     """The config run ``run`` renders with: ``cfg`` with its ``[output]`` sampling keys
-    (:attr:`Config.sampling`) set to the run's values; ``cfg`` itself when the store has one
+    (``Config.sampling``) set to the run's values; ``cfg`` itself when the store has one
     sampling. Lists cycle over the runs, distributions are drawn from node
     ``(run, SEED_SAMPLING)``; the result keeps ``sampling``, so the store's shape and parameter
     table (:mod:`demseis.generator.config.layout`) are the same for every run."""

@@ -68,7 +68,7 @@ def renders_by_snapshot(spec: RunSpec) -> list[tuple[int, list[Render]]]:
 def render_run(cfg: Config, run: EngineRun, engine: Engine) -> ShardData:
     """Every sample of ``run``: the states ``engine`` makes of its rendered snapshots, imaged.
 
-    Where the store's sampling varies from run to run (:attr:`Config.sampling`), the run is
+    Where the store's sampling varies from run to run (``Config.sampling``), the run is
     rendered at its own (:func:`config_of_run`), its sections cropped to the store's shape
     (:func:`crop_to`) and its sampling stored with each sample (``dt_s``, 0 in depth, and
     ``trace_spacing_m``)."""
