@@ -131,17 +131,22 @@ def test_generator_layers_run_one_way():
     assert not bad, "generator layers imported against their order:\n" + "\n".join(bad)
 
 
-def test_generator_layer_check_is_not_vacuous(tmp_path, monkeypatch):
+def _fake_package(tmp_path: Path, monkeypatch, files: dict[str, str]) -> None:
+    """Write a fake ``demseis`` package of ``files`` (path below it -> source) under
+    ``tmp_path`` and point the checks of this module at it."""
     fake = tmp_path / "demseis"
-    for sub in ("generator/config", "generator/render", "generator/stray"):
-        (fake / sub).mkdir(parents=True)
-    (fake / "__init__.py").write_text("")
-    (fake / "generator" / "config" / "x.py").write_text(
-        "from demseis.generator.render.section import render_run\n")
-    (fake / "generator" / "render" / "y.py").write_text("from demseis.generator.config import x\n")
-    (fake / "generator" / "stray" / "z.py").write_text("")
+    for rel, source in {"__init__.py": "", **files}.items():
+        (fake / rel).parent.mkdir(parents=True, exist_ok=True)
+        (fake / rel).write_text(source)
     monkeypatch.setattr(f"{__name__}.PKG", fake)
     monkeypatch.setattr(f"{__name__}.ROOT", tmp_path)
+
+
+def test_generator_layer_check_is_not_vacuous(tmp_path, monkeypatch):
+    _fake_package(tmp_path, monkeypatch, {
+        "generator/config/x.py": "from demseis.generator.render.section import render_run\n",
+        "generator/render/y.py": "from demseis.generator.config import x\n",
+        "generator/stray/z.py": ""})
     with pytest.raises(AssertionError) as err:
         test_generator_layers_run_one_way()
     msg = str(err.value)
@@ -196,19 +201,12 @@ def test_product_never_imports_diagnostics():
 
 def test_diagnostics_check_is_not_vacuous(tmp_path, monkeypatch):
     """Product imports of diagnostics are caught, eager ones in cli/bench.py too; lazy pass."""
-    fake = tmp_path / "demseis"
-    for sub in ("generator", "cli", "diagnostics"):
-        (fake / sub).mkdir(parents=True)
-    (fake / "__init__.py").write_text("")
-    (fake / "generator" / "x.py").write_text(
-        "def f():\n    from demseis.diagnostics.toys import disk_pack\n")
-    (fake / "cli" / "plots.py").write_text("from demseis import diagnostics\n")
-    (fake / "cli" / "bench.py").write_text(
-        "import demseis.diagnostics.bench\n"
-        "def cmd():\n    from demseis.diagnostics import bench\n")
-    (fake / "diagnostics" / "bench.py").write_text("from demseis.diagnostics.toys import x\n")
-    monkeypatch.setattr(f"{__name__}.PKG", fake)
-    monkeypatch.setattr(f"{__name__}.ROOT", tmp_path)
+    _fake_package(tmp_path, monkeypatch, {
+        "generator/x.py": "def f():\n    from demseis.diagnostics.toys import disk_pack\n",
+        "cli/plots.py": "from demseis import diagnostics\n",
+        "cli/bench.py": ("import demseis.diagnostics.bench\n"
+                         "def cmd():\n    from demseis.diagnostics import bench\n"),
+        "diagnostics/bench.py": "from demseis.diagnostics.toys import x\n"})
     try:
         test_product_never_imports_diagnostics()
     except AssertionError as exc:
@@ -222,13 +220,9 @@ def test_diagnostics_check_is_not_vacuous(tmp_path, monkeypatch):
 
 def test_checker_catches_a_backward_import(tmp_path, monkeypatch):
     """The rank rule is not vacuous: a stage importing datasets is caught."""
-    fake = tmp_path / "demseis"
-    (fake / "seismic").mkdir(parents=True)
-    (fake / "__init__.py").write_text("")
-    (fake / "seismic" / "x.py").write_text("from demseis.datasets import open_store\n"
-                                           "from demseis.labels.maps import label_maps\n")
-    monkeypatch.setattr(f"{__name__}.PKG", fake)
-    monkeypatch.setattr(f"{__name__}.ROOT", tmp_path)
+    _fake_package(tmp_path, monkeypatch, {
+        "seismic/x.py": ("from demseis.datasets import open_store\n"
+                         "from demseis.labels.maps import label_maps\n")})
     try:
         test_imports_run_one_way()
     except AssertionError as exc:

@@ -57,7 +57,7 @@ def test_samples_record_their_basement_faults():
     engine = get_engine("dem")
     data = render_run(cfg, engine.simulate(cfg, spec), engine)
     p = data.params
-    assert set(p) == set(param_dtypes())
+    assert set(p) == set(param_dtypes(cfg))
     assert np.all(p["n_basement_faults"] == 2)
     kinds = param_codes()["fault_kind"]
     assert np.all(p["fault0_kind"] == kinds.index("normal"))

@@ -133,12 +133,12 @@ def array_dtypes(cfg: Config) -> dict[str, str]:
     return {name: SAMPLE_ARRAYS.get(name).dtype for name in stored_arrays(options)}
 
 
-def param_dtypes(cfg: Config | None = None) -> dict[str, str]:
-    """Name → dtype of the per-sample parameter arrays (the columns of the store's ``params``
-    table); with ``cfg``, also the sampling of each sample where it varies from run to run
+def param_dtypes(cfg: Config) -> dict[str, str]:
+    """Name → dtype of the per-sample parameter arrays of ``cfg``'s store (the columns of its
+    ``params`` table), the sampling of each sample among them where it varies from run to run
     (:data:`demseis.parameters.SAMPLING_STORED`)."""
     out = {s.name: s.dtype for s in STORED}
-    if cfg is not None and cfg.sampling:
+    if cfg.sampling:
         out.update({s.name: s.dtype for s in SAMPLING_STORED})
     codes = param_codes()
     for key, pdef in SCENARIO.items():

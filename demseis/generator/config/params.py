@@ -191,14 +191,7 @@ def spec_candidates(spec: Spec) -> tuple:
 
 def spec_values_hint(spec: Spec) -> tuple[Any, Any] | None:
     """The (min, max) a numeric spec can produce, or None for strings and bools."""
-    if isinstance(spec, Fixed):
-        vals = (spec.value,)
-    elif isinstance(spec, GridSpec):
-        vals = spec.values
-    elif spec.dist == "choice":
-        vals = spec.values
-    else:
-        return (spec.low, spec.high)
+    vals = spec_candidates(spec)
     if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in vals):
         return (min(vals), max(vals))
     return None
