@@ -20,7 +20,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from demseis.dem import Material  # noqa: E402
-from demseis.diagnostics.calibrate import biaxial_test, mohr_coulomb_fit  # noqa: E402
+from demseis_dev.calibrate import biaxial_test, mohr_coulomb_fit  # noqa: E402
 
 
 def main(argv=None) -> int:

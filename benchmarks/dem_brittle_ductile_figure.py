@@ -10,7 +10,7 @@ Usage::
 Each .npz is a run saved by ``dem_localisation.py --save`` (5 km x 2.77 km seed model). The
 seismic uses the default PropertyModel with the same layer-property draw (seed 0) for both
 runs, a 10 m grid and a 40 Hz Ricker wavelet, no noise. Prints ONE JSON line with the
-mid-depth horizon step of each run (:func:`demseis.diagnostics.measure.horizon_step`).
+mid-depth horizon step of each run (:func:`demseis_dev.measure.horizon_step`).
 """
 
 from __future__ import annotations

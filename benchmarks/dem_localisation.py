@@ -9,7 +9,7 @@ Usage::
 Runs one basement normal fault (seed: 5 km x 2.77 km, 48 layers, 45 deg, 450 m throw at
 x = 2.5 km; quick: half of every length, 24 layers, 225 m throw), then measures on the final
 snapshot the drop of the mid-depth horizon (layer n_layers // 2) across the best 100 m-wide
-window near the fault (:func:`demseis.diagnostics.measure.horizon_step`) and the same over 400 m.
+window near the fault (:func:`demseis_dev.measure.horizon_step`) and the same over 400 m.
 Prints ONE JSON line with the material, the drops, their ratio to the throw, and timings.
 """
 
@@ -26,9 +26,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from demseis.dem import Material, NormalFault, build_assembly, settle_pack, simulate  # noqa
-from demseis.diagnostics.measure import horizon_step  # noqa
 from _dem_common import finish  # noqa: E402  (benchmarks/ is on sys.path)
+
+from demseis.dem import Material, NormalFault, build_assembly, settle_pack, simulate  # noqa
+from demseis_dev.measure import horizon_step  # noqa
 
 SCALES = {"seed": (5000.0, 2770.0, 48, 450.0), "quick": (2500.0, 1385.0, 24, 225.0)}
 

@@ -19,14 +19,17 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 
 from demseis.dem import element_maps, reference_coordinates
-from demseis.diagnostics.toys import (disk_pack, down_dip_vector, fault_signed_distance,
-                                      kinematic_fault)
 from demseis.labels import displacement_history
+from demseis_dev.toys import disk_pack, down_dip_vector, fault_signed_distance, kinematic_fault
 
 
 def _columns(width, height, n_cols, dz):

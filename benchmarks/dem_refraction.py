@@ -16,9 +16,9 @@ exactly BRITTLE's 1.4e9 N) and the layers' materials come from
 base Kn) and ``--weak-friction`` override the weak layers' stiffness and friction.
 
 On every snapshot each unit's fault dip is fitted in reference coordinates
-(:func:`demseis.diagnostics.measure.unit_dips`: the line that best splits the displacement field,
+(:func:`demseis_dev.measure.unit_dips`: the line that best splits the displacement field,
 traced up from the basement) and the strong and weak units' mean dips (folded to 0..90 deg,
-:func:`demseis.diagnostics.measure.strong_weak_dips`) are compared. Prints ONE JSON line.
+:func:`demseis_dev.measure.strong_weak_dips`) are compared. Prints ONE JSON line.
 """
 
 from __future__ import annotations
@@ -33,10 +33,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from demseis.dem import BRITTLE, NormalFault, build_assembly, settle_pack, simulate  # noqa
-from demseis.diagnostics.measure import strong_weak_dips  # noqa
-from demseis.dem.strata import alternation, is_strong, layer_materials  # noqa
 from _dem_common import finish  # noqa: E402  (benchmarks/ is on sys.path)
+
+from demseis.dem import BRITTLE, NormalFault, build_assembly, settle_pack, simulate  # noqa
+from demseis.dem.strata import alternation, is_strong, layer_materials  # noqa
+from demseis_dev.measure import strong_weak_dips  # noqa
 
 W, H, N_LAYERS, THROW = 5000.0, 2770.0, 24, 450.0
 

@@ -58,8 +58,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from demseis.dem import Material  # noqa: E402,F401
 from demseis.dem.assembly import draw_radii, loose_grid  # noqa: E402
-from demseis.diagnostics.bench import BENCH_MATERIAL, load_pack, pack_walls, seed_pack  # noqa: E402
 from demseis.dem.integrator import Integrator, time_step  # noqa: E402
+from demseis_dev.bench import BENCH_MATERIAL, load_pack, pack_walls, seed_pack  # noqa: E402
 
 
 def write_lammps_data(path: Path, xy: np.ndarray, radius: np.ndarray, box: tuple) -> None:

@@ -1,7 +1,7 @@
 """DEM coverage of the slip-trace labels, per preset. Prints one JSON line.
 
 Coverage = share of the cells whose displacement jump
-(:func:`demseis.diagnostics.coverage.jump_field`, from the particles, independent of the
+(:func:`demseis_dev.coverage.jump_field`, from the particles, independent of the
 extraction) is >= 2 x min_slip_m that lie within 2 cells of a fault label, pooled over the
 snapshots after the first of each run: ``coverage`` for the ``fault`` mask (the slip-surface
 lines), ``core_coverage`` for the fault core (``damage`` class 2: the fault mask and the shear
@@ -29,7 +29,11 @@ import argparse
 import json
 import os
 import pickle
+import sys
 import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 
@@ -103,11 +107,11 @@ def measure(preset: str, run: int, cache: str | None, strand_sigma_cells: float 
             metric: str = "euclidean", sets: dict | None = None) -> dict:
     """Coverage, rungs, loops, slip floor and label_maps time of one DEM run."""
 
-    from demseis.diagnostics.coverage import jump_coverage, jump_field
     from demseis.generator.config.layout import grid_of
     from demseis.generator.config.settings import load_config
     from demseis.labels import (displacement_history, label_maps, loop_count, rung_fraction,
                                 strain_history)
+    from demseis_dev.coverage import jump_coverage, jump_field
 
     cfg = load_config(None, preset=preset)
     grid = grid_of(cfg)
@@ -186,10 +190,10 @@ def ab_timing(preset: str, run: int, cache: str | None, repeats: int = 3) -> dic
 def kinematic(metric: str = "euclidean") -> dict:
     """Coverage of the labels (fault mask and fault core) and of the true plane on the planar
     kinematic faults."""
-    from demseis.diagnostics.coverage import jump_coverage, jump_field
-    from demseis.diagnostics.toys import disk_pack, fault_signed_distance, kinematic_fault
     from demseis.labels import LabelConfig, displacement_history, label_maps, strain_history
     from demseis.types import Grid, Snapshot
+    from demseis_dev.coverage import jump_coverage, jump_field
+    from demseis_dev.toys import disk_pack, fault_signed_distance, kinematic_fault
 
     width, height, cell = 2000.0, 1000.0, 10.0
     grid = Grid.covering(width, height, cell)

@@ -14,14 +14,17 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from demseis.types import Snapshot
 from demseis.labels import LabelConfig, element_strain, label_maps, mask_thickness_cells
-from demseis.diagnostics.toys import disk_pack, fault_signed_distance, kinematic_fault
-from demseis.types import Grid
+from demseis.types import Grid, Snapshot
+from demseis_dev.toys import disk_pack, fault_signed_distance, kinematic_fault
 
 W, H, XF = 2000.0, 1000.0, 1200.0
 

@@ -4,7 +4,7 @@ For each sampling (4 ms time with small throws tapering to zero, 4 ms with large
 depth cells), renders kinematic runs with one planar fault (dips 35-80 deg, normal and
 reverse, 25 m traces) and prints one JSON line with the pooled share of label pixels within
 one pixel of the true trace and of the true trace (throw >= min_throw_samples) within one
-pixel of a label (demseis.diagnostics.picks.kinematic_agreement). With --store, one more line
+pixel of a label (demseis_dev.picks.kinematic_agreement). With --store, one more line
 with the loops and rungs of every sample's labels there (shape_counts).
 
     PYTHONPATH=$PWD python benchmarks/labels_picks.py [--runs 8] [--store quick.zarr]
@@ -14,7 +14,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 
@@ -28,7 +32,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--runs", type=int, default=8)
     ap.add_argument("--store", help="a store whose labels' loops and rungs are counted")
     args = ap.parse_args(argv)
-    from demseis.diagnostics.picks import kinematic_agreement, planar_fault_sweep, shape_counts
+    from demseis_dev.picks import kinematic_agreement, planar_fault_sweep, shape_counts
 
     for name, (domain, throw, taper) in CASES.items():
         t0 = time.perf_counter()

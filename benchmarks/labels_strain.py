@@ -4,8 +4,12 @@ Run: PYTHONPATH=$PWD NUMBA_NUM_THREADS=1 python benchmarks/labels_strain.py  (on
 """
 
 import json
+import sys
+from pathlib import Path
 
-from demseis.diagnostics.bench import labels_benchmark as run_benchmark
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
+
+from demseis_dev.bench import labels_benchmark as run_benchmark
 
 if __name__ == "__main__":
     print(json.dumps(run_benchmark()))

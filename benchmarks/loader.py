@@ -3,7 +3,7 @@
 Prints one JSON line: median samples/s over ``--repeats`` epochs of random 256x256 crops
 (seismic input, fault target) at 0 and 2 DataLoader workers, for the Zarr store read through
 FaultSegDataset + ShardAwareSampler and for raw .npy memmaps of the same arrays (the limit),
-measured side by side in one run. Same as ``demseis bench loader``.
+measured side by side in one run. Same as ``python -m demseis_dev.bench loader``.
 
     PYTHONPATH=$PWD python benchmarks/loader.py [--shards 24 --samples-per-shard 32 ...]
 """

@@ -1,6 +1,6 @@
 """What the loader's checksum policy costs: each chunk checked once vs on every read (one JSON line).
 
-Builds a temporary store like ``demseis bench loader`` (band-limited 277x500 sections and fault
+Builds a temporary store like ``python -m demseis_dev.bench loader`` (band-limited 277x500 sections and fault
 masks), then times DataLoader epochs (0 workers, random 256x256 crops, batch 32,
 ShardAwareSampler) of two FaultSegDatasets over it, alternating epoch by epoch in one process:
 
@@ -20,9 +20,12 @@ import argparse
 import json
 import shutil
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 
@@ -31,14 +34,9 @@ def main() -> None:
     import torch
     from torch.utils.data import DataLoader
 
-    from demseis.diagnostics.bench import synthetic_shard
-    from demseis.datasets import (
-        FaultSegDataset,
-        ShardAwareSampler,
-        create_store,
-        finalize_store,
-        write_shard,
-    )
+    from demseis.datasets import (FaultSegDataset, ShardAwareSampler, create_store, finalize_store,
+                                  write_shard)
+    from demseis_dev.bench import synthetic_shard
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--shards", type=int, default=24)

@@ -2,7 +2,7 @@
 
 Sections (96 x 96 samples): sparse random reflectivity convolved with a 25 Hz Ricker at 4 ms,
 dipping 0.1 samples/trace, cut by a planar 70-degree normal fault with a 6-sample throw; truth is
-the pixels within 1 px of the fault trace (demseis.diagnostics.toys.faulted_section).
+the pixels within 1 px of the fault trace (demseis_dev.toys.faulted_section).
 White noise is added at SNR = 20 log10(rms signal / rms noise). Reports micro precision,
 recall, F1 at the default threshold 0.5, ODS F1 and AP at tolerance 0 and 2 px, over 16
 sections per SNR, plus the chance AP (the fault pixel fraction).
@@ -12,6 +12,10 @@ Usage: ``python benchmarks/score_baseline_synthetic.py``.
 from __future__ import annotations
 
 import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 
@@ -20,7 +24,7 @@ from demseis.evaluation.scoring import score
 
 
 def faulted_section(seed: int, snr_db: float, nz: int = 96, nx: int = 96):
-    from demseis.diagnostics.toys import faulted_section as make
+    from demseis_dev.toys import faulted_section as make
 
     sec, truth = make(nz=nz, nx=nx, seed=seed)
     if np.isfinite(snr_db):

@@ -8,12 +8,16 @@ runs both baselines on 8 sections, each repeated; medians of the repeats, after 
 from __future__ import annotations
 
 import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 
 from demseis.evaluation.baseline import dip_fault_probability, semblance_fault_probability
 from demseis.evaluation.scoring import score
-from demseis.diagnostics.bench import median_ms
+from demseis_dev.bench import median_ms
 
 
 def _seconds(fn, repeats: int) -> float:

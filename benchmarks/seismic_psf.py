@@ -2,7 +2,7 @@
 
 Usage: ``NUMBA_NUM_THREADS=1 PYTHONPATH=. python benchmarks/seismic_psf.py [--repeats 21]``
 
-The snapshot is the one of ``demseis bench seismic`` (the last, throw 450 m, of the kinematic
+The snapshot is the one of ``python -m demseis_dev.bench seismic`` (the last, throw 450 m, of the kinematic
 toy sequence on 512 x 288 cells of 10 m). Each repeat times, back to back so that machine load
 hits all alike: the whole per-snapshot render (element properties -> property grids ->
 sections) with the 1-D convolution and with the PSF, and the section step alone
@@ -18,16 +18,20 @@ import argparse
 import json
 import os
 import platform
+import sys
 import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 
-from demseis.diagnostics.toys import faulted_sequence
 from demseis.seismic.forward import synthetic_sections, time_axis
-from demseis.types import Grid
 from demseis.seismic.properties import (PropertyModel, draw_layer_properties, element_properties,
                                         property_grids)
 from demseis.seismic.psf import psf_sections
+from demseis.types import Grid
+from demseis_dev.toys import faulted_sequence
 
 
 def run(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeats: int = 21,

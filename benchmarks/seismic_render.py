@@ -1,7 +1,7 @@
 """Milliseconds per rendered snapshot/section of the seismic stage; prints one JSON line.
 
 Usage: ``PYTHONPATH=. python benchmarks/seismic_render.py [--nx 512 --nz 288 --repeats 7]``
-(the same measurement as ``demseis bench seismic``). Set NUMBA_NUM_THREADS=1 to match the
+(the same measurement as ``python -m demseis_dev.bench seismic``). Set NUMBA_NUM_THREADS=1 to match the
 sweep's workers; the kernels are serial anyway.
 """
 
@@ -9,8 +9,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+from pathlib import Path
 
-from demseis.diagnostics.bench import seismic_benchmark as run_benchmark
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
+
+from demseis_dev.bench import seismic_benchmark as run_benchmark
 
 
 def main() -> None:

@@ -19,13 +19,16 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
+import sys
 import tempfile
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 
 from demseis.datasets import create_store, shard_status, validate_store, write_shard
-from demseis.diagnostics.bench import median_ms, synthetic_shard
+from demseis_dev.bench import median_ms, synthetic_shard
 
 
 def _seconds(fn, repeats: int) -> float:

@@ -2,7 +2,7 @@
 
 Usage: ``PYTHONPATH=. python benchmarks/strata_stats.py [--seeds 4]``
 
-For each seed, :func:`demseis.diagnostics.strata_stats.default_setup` (48 layers over 1200 m,
+For each seed, :func:`demseis_dev.strata_stats.default_setup` (48 layers over 1200 m,
 5 km wide, default ``PropertyModel`` and ``BedModel``): the reflectivity of the column at
 x = 1000 m (0.25 m cells; excess kurtosis in depth, of the interfaces alone and in 1 ms
 two-way-time bins; spectral slope of log power vs log frequency over 10-80 Hz) and, for a flat
@@ -15,12 +15,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 
-from demseis.diagnostics.strata_stats import (adjacent_trace_correlation, column_reflectivity,
-                                              default_setup, flat_section,
-                                              zero_crossings)
+from demseis_dev.strata_stats import (adjacent_trace_correlation, column_reflectivity,
+                                      default_setup, flat_section, zero_crossings)
 
 
 def main() -> None:

@@ -23,8 +23,9 @@ the names above load on first use. Subpackages, in data-flow order:
 - :mod:`demseis.parameters` every parameter declared once (``demseis params``)
 - :mod:`demseis.types`      the shared :class:`~demseis.types.Grid` and :class:`~demseis.types.Snapshot`
 
-Beside them, :mod:`demseis.diagnostics` holds what measures and times the package (``demseis
-bench``, the DEM biaxial calibration, particle measures, toy inputs); nothing above imports it.
+Beside them, in the checkout but not installed, ``demseis_dev`` holds what measures and times
+the package (stage speed benchmarks, the DEM biaxial calibration, particle measures, toy
+inputs); nothing above imports it.
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ Usage::
         --out docs/figures/seismic_psf.png
 
 Without ``--store`` the last snapshot of the kinematic toy sequence of
-:mod:`demseis.diagnostics.toys` is drawn (the title says which). Top row: the section at
+:mod:`demseis_dev.toys` is drawn (the title says which). Top row: the section at
 ``--freq`` Hz (depth domain, no noise) in 1-D and with the PSF at the two ``--angles``;
 bottom row: the image of one point scatterer (one cell of 20 % higher density in a constant
 medium: a +R / -R pair of reflection coefficients) by
@@ -18,7 +18,10 @@ relative to the 1-D one written in it).
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 
@@ -30,12 +33,12 @@ from demseis.types import Grid
 def _snapshots(store: str | None, run: int, cell_m: float):
     """(snapshots, grid, source) of a store's run (its sweep's grid) or of the toy sequence."""
     if store is None:
-        from demseis.diagnostics.toys import faulted_sequence
+        from demseis_dev.toys import faulted_sequence
 
         snaps = faulted_sequence(2500.0, 1100.0, n_layers=24, throw_m=300.0,
                                  rng=np.random.default_rng(0))
         return (snaps, Grid.covering(2500.0, 1100.0, cell_m),
-                "kinematic toy fault (demseis.diagnostics.toys), not DEM")
+                "kinematic toy fault (demseis_dev.toys), not DEM")
     from demseis.datasets import open_store, read_particles
     from demseis.generator.config.settings import parse_config
 

@@ -8,22 +8,25 @@
 
 Snapshots come from an ``.npz`` written from DEM snapshots with
 :func:`demseis.types.save_snapshots` or, without one, from the kinematic toy sequence of
-:func:`demseis.diagnostics.toys.faulted_sequence` (the figure title says which).
+:func:`demseis_dev.toys.faulted_sequence` (the figure title says which).
 matplotlib is imported inside the functions.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # demseis_dev: the checkout's
 
 import numpy as np
 
 from demseis.seismic.forward import impedance, reflectivity, synthetic_sections
-from demseis.types import Grid, load_snapshots
 from demseis.seismic.properties import (PropertyModel, draw_layer_properties, element_properties,
                                         fill_background, property_grids)
 from demseis.seismic.raster import rasterise
+from demseis.types import Grid, load_snapshots
 
 
 def _extent_km(grid: Grid) -> list[float]:
@@ -175,7 +178,7 @@ def main(argv=None) -> int:
         snaps = load_snapshots(a.npz)
         source = "DEM (branch dem, simulate)"
     else:
-        from demseis.diagnostics.toys import faulted_sequence
+        from demseis_dev.toys import faulted_sequence
 
         snaps = faulted_sequence(a.width_m, a.height_m, dip_deg=60.0,
                                  rng=np.random.default_rng(0))

@@ -26,7 +26,6 @@ def test_a_closed_stdout_ends_quietly_with_141(tiny_store):
     (["generate"], "the following arguments are required: --out"),
     (["score"], "the following arguments are required: predictions, STORE|MASK"),
     (["nosuch"], "invalid choice: 'nosuch'"),
-    (["bench", "nosuch"], "invalid choice: 'nosuch'"),
     (["generate", "--out", "x", "--workers", "-1"], "'-1' must be >= 0"),
     (["info", "a", "b", "c"], "unrecognized arguments"),
 ])

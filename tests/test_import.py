@@ -8,7 +8,7 @@ import sys
 CODE = """
 import sys
 import demseis, demseis.dem, demseis.seismic, demseis.labels, demseis.datasets, demseis.generator
-import demseis.cli, demseis.evaluation, demseis.types, demseis.diagnostics.toys
+import demseis.cli, demseis.evaluation, demseis.types, demseis_dev.toys
 heavy = sorted(m for m in ("torch", "dask", "distributed", "matplotlib") if m in sys.modules)
 print(",".join(heavy))
 """

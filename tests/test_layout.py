@@ -3,10 +3,9 @@
 cli -> plotting / api -> generator | learning -> evaluation -> datasets -> dem | seismic | labels
 -> types / parameters / schema -> registry -> errors | interrupts (standard library only). A stage (dem, seismic, labels) never
 imports ``datasets`` and reaches another stage only through its package (``from demseis.seismic
-import rasterise``), never its modules. ``diagnostics`` (benchmarks, calibration, measures, toy
-inputs) may import any of these but no product module imports it: only the handlers of
-``demseis bench`` do, inside themselves. No module imports, even indirectly, a module that
-imports it. Every import counts, including those inside functions.
+import rasterise``), never its modules. ``demseis_dev`` (benchmarks, calibration, measures, toy
+inputs), beside the package and not installed, may import any of these, but no module of the
+package imports it. No module imports, even indirectly, a module that imports it. Every import counts, including those inside functions.
 """
 
 from __future__ import annotations
@@ -30,11 +29,9 @@ RANK = {
     "datasets": 4,
     "evaluation": 5,
     "generator": 6, "learning": 6,
-    "api": 7, "plotting": 7, "diagnostics": 7, "survey_fit": 7,
+    "api": 7, "plotting": 7, "survey_fit": 7,
     "cli": 8, "__main__": 9,
 }
-#: the modules outside ``demseis/diagnostics`` that may import it, and only inside a function
-DIAGNOSTICS_USERS = {"cli/bench.py"}
 #: names of the root package any module may import (the root module imports nothing heavy)
 ROOT_NAMES = {"__version__", "DemseisError"}
 
@@ -180,42 +177,31 @@ def test_nothing_imports_tests():
     assert not bad, "\n".join(bad)
 
 
-def test_product_never_imports_diagnostics():
-    bad = []
-    for path in _module_files():
-        rel = path.relative_to(PKG)
-        if rel.parts[0] == "diagnostics":
-            continue
-        allowed = rel.as_posix() in DIAGNOSTICS_USERS
-        eager = _module_level_import_lines(path)
-        for mod, names, line in _imports(path):
-            if not (mod == "demseis.diagnostics" or mod.startswith("demseis.diagnostics.")
-                    or (mod == "demseis" and "diagnostics" in names)):
-                continue
-            if not allowed:
-                bad.append(f"{rel}:{line} imports {mod} (a product module)")
-            elif line in eager:
-                bad.append(f"{rel}:{line} imports {mod} at import time (only inside a handler)")
-    assert not bad, "demseis.diagnostics reached from the product:\n" + "\n".join(bad)
+def test_package_never_imports_demseis_dev():
+    """demseis_dev is not installed: an import of it anywhere in the package would fail for
+    users (inside a function too)."""
+    bad = [f"{path.relative_to(PKG)}:{line} imports {mod}"
+           for path in _module_files() for mod, _names, line in _imports(path)
+           if mod == "demseis_dev" or mod.startswith("demseis_dev.")]
+    assert not bad, "demseis_dev reached from the package:\n" + "\n".join(bad)
 
 
-def test_diagnostics_check_is_not_vacuous(tmp_path, monkeypatch):
-    """Product imports of diagnostics are caught, eager ones in cli/bench.py too; lazy pass."""
+def test_demseis_dev_check_is_not_vacuous(tmp_path, monkeypatch):
+    """Eager and lazy imports of demseis_dev are both caught."""
     _fake_package(tmp_path, monkeypatch, {
-        "generator/x.py": "def f():\n    from demseis.diagnostics.toys import disk_pack\n",
-        "cli/plots.py": "from demseis import diagnostics\n",
-        "cli/bench.py": ("import demseis.diagnostics.bench\n"
-                         "def cmd():\n    from demseis.diagnostics import bench\n"),
-        "diagnostics/bench.py": "from demseis.diagnostics.toys import x\n"})
-    try:
-        test_product_never_imports_diagnostics()
-    except AssertionError as exc:
-        msg = str(exc)
-        assert "generator/x.py:2" in msg and "cli/plots.py:1" in msg, msg
-        assert "cli/bench.py:1" in msg and "cli/bench.py:3" not in msg, msg
-        assert "diagnostics/bench.py" not in msg, msg
-    else:
-        raise AssertionError("a generator -> diagnostics import passed the check")
+        "generator/x.py": "def f():\n    from demseis_dev.toys import disk_pack\n",
+        "cli/plots.py": "import demseis_dev.bench\n"})
+    with pytest.raises(AssertionError) as err:
+        test_package_never_imports_demseis_dev()
+    assert "generator/x.py:2" in str(err.value) and "cli/plots.py:1" in str(err.value)
+
+
+def test_demseis_dev_is_not_installed():
+    """The distribution ships demseis and its subpackages only."""
+    import tomllib
+
+    find = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert find["packages"]["find"]["include"] == ["demseis", "demseis.*"]
 
 
 def test_checker_catches_a_backward_import(tmp_path, monkeypatch):

@@ -14,8 +14,8 @@ def test_seismic_figures_render(tmp_path):
     spec = importlib.util.spec_from_file_location("seismic_figures", SCRIPTS / "seismic_figures.py")
     figures = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(figures)
-    from demseis.diagnostics.toys import faulted_sequence
     from demseis.types import Grid
+    from demseis_dev.toys import faulted_sequence
 
     snaps = faulted_sequence(800.0, 500.0, n_layers=8, throw_m=100.0, n_snapshots=3,
                              rng=np.random.default_rng(0))

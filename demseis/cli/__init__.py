@@ -5,10 +5,8 @@
 - :mod:`demseis.cli.plots`: ``plot``, ``preview``
 - :mod:`demseis.cli.evaluate`: ``score``, ``baseline``, ``realism``
 - :mod:`demseis.cli.model`: ``train``, ``predict``
-- :mod:`demseis.cli.bench`: ``bench dem|seismic|labels|loader``
 
-Each module has ``register(sub, bench)``, where ``sub`` is the top-level subparsers object and
-``bench`` the subparsers of ``demseis bench``. A handler is ``func(args) -> int`` set with ``parser.set_defaults(func=...)``.
+Each module has ``register(sub)``, where ``sub`` is the top-level subparsers object. A handler is ``func(args) -> int`` set with ``parser.set_defaults(func=...)``.
 Handlers import what they run (the library, NumPy, dask, torch, matplotlib) inside themselves, so
 ``--help`` is fast.
 
@@ -29,7 +27,6 @@ from typing import NoReturn
 from demseis import __version__, interrupts
 from demseis.errors import DemseisError
 
-
 #: commands that write a store: an interrupted one resumes when run again
 WRITING_COMMANDS = frozenset({"generate", "render", "relabel", "migrate"})
 
@@ -45,7 +42,6 @@ class _Parser(argparse.ArgumentParser):
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser with every subpackage's subcommands registered."""
     # imported here so that main() also turns a Ctrl-C during these imports into its message
-    from demseis.cli import bench as bench_cli
     from demseis.cli import evaluate, generate, model, plots, store
 
     parser = _Parser(
@@ -54,17 +50,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"demseis {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    bench_parser = sub.add_parser("bench", help="speed benchmarks printing one JSON line")
-    bench = bench_parser.add_subparsers(dest="bench_target", metavar="TARGET")
-    bench_parser.set_defaults(func=lambda args: _missing_sub(bench_parser))
-    for module in (generate, store, plots, evaluate, model, bench_cli):
-        module.register(sub, bench)
+    for module in (generate, store, plots, evaluate, model):
+        module.register(sub)
     _describe(sub)
     return parser
 
 
 def _describe(sub: argparse._SubParsersAction) -> None:
-    """Give every command (and bench target) without a description its one-line help as one,
+    """Give every command (and sub-command) without a description its one-line help as one,
     so that ``demseis COMMAND --help`` says what the command does."""
     for choice in sub._choices_actions:
         parser = sub.choices[choice.dest]
@@ -73,12 +66,6 @@ def _describe(sub: argparse._SubParsersAction) -> None:
         for action in parser._actions:
             if isinstance(action, argparse._SubParsersAction):
                 _describe(action)
-
-
-def _missing_sub(parser: argparse.ArgumentParser) -> int:
-    parser.print_usage(sys.stderr)
-    print(f"{parser.prog}: error: choose a target", file=sys.stderr)
-    return 2
 
 
 def _path_arg(args: argparse.Namespace | None) -> str:

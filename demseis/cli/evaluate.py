@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 # `demseis --help` imports none of them (see demseis.cli).
 
 
-def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction) -> None:
     """Add ``score`` and ``baseline``."""
     p = sub.add_parser(
         "score",

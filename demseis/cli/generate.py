@@ -16,7 +16,7 @@ from demseis.errors import ConfigError, InputError
 # imports none of them (see demseis.cli).
 
 
-def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction) -> None:
     """Add ``generate``, ``render``, ``relabel`` and ``params``."""
     p = sub.add_parser(
         "generate",

@@ -11,7 +11,7 @@ from demseis.cli._args import nonneg_int, pos_int
 from demseis.errors import InputError
 
 
-def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction) -> None:
     """Add ``train`` and ``predict``."""
     t = sub.add_parser(
         "train", help="train a fault-segmentation U-Net on one or more stores (needs "

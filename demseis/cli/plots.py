@@ -10,7 +10,7 @@ from demseis.cli._args import nonneg_int
 # so that `demseis --help` imports none of it (see demseis.cli).
 
 
-def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction) -> None:
     """Add ``preview`` and ``plot``."""
     p = sub.add_parser("preview", help="PNG figures of one run (like the paper's Figures 2-6)")
     p.add_argument("source", metavar="SOURCE", help="a TOML config, a preset name, or a store")

@@ -13,7 +13,7 @@ import sys
 # imports none of them (see demseis.cli).
 
 
-def register(sub: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction) -> None:
     """Add ``info``, ``validate``, ``export-segy`` and ``migrate``."""
     p = sub.add_parser("info", help="summarise a store: samples, shapes, parameter ranges, config")
     p.add_argument("path", metavar="STORE", help="store path")

@@ -9,10 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from demseis.dem import Material, NormalFault, build_assembly, settle_pack, simulate
+from demseis.dem import Material, NormalFault
 from demseis.dem import basement as B
-from demseis.diagnostics.measure import displacement_jump, section_length, slip_sense
+from demseis.dem import build_assembly, settle_pack, simulate
 from demseis.errors import InputError
+from demseis_dev.measure import displacement_jump, section_length, slip_sense
 
 W, H = 1000.0, 500.0
 
@@ -253,7 +254,7 @@ def test_brittle_cover_localises_at_seed_scale():
     """Seed scale (5 km x 2.77 km, 45 deg, 450 m): the brittle cover steps the mid-depth
     horizon by >= half the throw within 100 m; the default (ductile) material drapes it."""
     from demseis.dem import BRITTLE
-    from demseis.diagnostics.measure import horizon_step
+    from demseis_dev.measure import horizon_step
 
     pack = settle_pack(5000.0, 2770.0, rng=0)
     asm_ = build_assembly(5000.0, 2770.0, n_layers=48, pack=pack)

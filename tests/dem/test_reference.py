@@ -6,23 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from demseis.dem import (
-    NormalFault,
-    build_assembly,
-    element_maps,
-    reference_coordinates,
-    reference_map,
-    settle_pack,
-    simulate,
-)
-from demseis.diagnostics.toys import (
-    disk_pack,
-    down_dip_vector,
-    fault_signed_distance,
-    kinematic_fault,
-)
+from demseis.dem import (NormalFault, build_assembly, element_maps, reference_coordinates,
+                         reference_map, settle_pack, simulate)
 from demseis.errors import InputError
 from demseis.labels import displacement_history
+from demseis_dev.toys import disk_pack, down_dip_vector, fault_signed_distance, kinematic_fault
 
 R_MIN, R_MAX = 5.0, 25.0
 

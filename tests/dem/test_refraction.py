@@ -5,8 +5,8 @@ units alternating sandstone and shale from the base, a brittle cover whose stron
 :data:`demseis.dem.BRITTLE` (strength contrast 9 about a base cohesion of BRITTLE's / 3: weak
 layers 9x lower cohesion, 4x softer, half the friction; :func:`demseis.dem.strata.layer_materials`).
 The dip of the fault in each unit is fitted in reference coordinates
-(:func:`demseis.diagnostics.measure.unit_dips`, checked on a kinematic fault with imposed
-refraction in ``tests/diagnostics/test_measure.py``). The same runs with uniform mechanics are
+(:func:`demseis_dev.measure.unit_dips`, checked on a kinematic fault with imposed
+refraction in ``tests/demseis_dev/test_measure.py``). The same runs with uniform mechanics are
 the control: the dip of a brittle fault wanders from unit to unit by itself (per run the
 control's strong-minus-weak difference was -3.7 to +8 deg over three seeds, docs/dem.md), so
 two seeds are averaged and the contrast must beat its own control.
@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 from demseis.dem import BRITTLE, NormalFault, build_assembly, settle_pack, simulate
-from demseis.diagnostics.measure import strong_weak_dips
 from demseis.dem.strata import alternation, is_strong, layer_materials
+from demseis_dev.measure import strong_weak_dips
 
 N_LAYERS, UNIT = 24, 2
 

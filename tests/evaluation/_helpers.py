@@ -42,7 +42,7 @@ def toy_store(path, n_shards=5, per_shard=4, h=32, w=32, fault_fn=None, seismic_
     """Faulted sections written with demseis.datasets; ``fault_fn`` / ``seismic_fn`` (arrays of
     one shard in, out) make a store with other labels or other seismic of the same samples."""
     from demseis import datasets
-    from demseis.diagnostics.toys import faulted_section
+    from demseis_dev.toys import faulted_section
 
     datasets.create_store(path, n_shards=n_shards, samples_per_shard=per_shard, shape=(h, w),
                           arrays=["seismic", "fault"],

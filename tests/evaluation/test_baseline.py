@@ -7,12 +7,13 @@ import json
 import numpy as np
 import pytest
 
-from demseis.errors import InputError
 from demseis.cli import main
+from demseis.errors import InputError
 from demseis.evaluation._kernels import dip_scan_semblance
 from demseis.evaluation.baseline import SemblanceBaseline, semblance_fault_probability
 from demseis.evaluation.scoring import score
-from demseis.diagnostics.toys import faulted_section, ricker_pulse as ricker
+from demseis_dev.toys import faulted_section
+from demseis_dev.toys import ricker_pulse as ricker
 from tests.evaluation._helpers import make_store
 
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from demseis.labels import LabelConfig, displacement_history, label_maps, strain_history
-from demseis.diagnostics.toys import fault_signed_distance
 from demseis.types import Grid, Snapshot
+from demseis_dev.toys import fault_signed_distance
 
 W, H, XF, CELL = 2000.0, 1000.0, 1200.0, 10.0
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from demseis.diagnostics.toys import disk_pack
+from demseis_dev.toys import disk_pack
 
 
 @pytest.fixture(scope="session")

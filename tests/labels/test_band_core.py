@@ -10,18 +10,13 @@ from scipy import ndimage
 
 from demseis.errors import ConfigError
 from demseis.labels import LabelConfig
-from demseis.labels.core import (
-    CORE_HOLE_CELLS,
-    CORE_MIN_EXTENT_CELLS,
-    CORE_SIGMA_CELLS,
-    band_core,
-)
+from demseis.labels.core import CORE_HOLE_CELLS, CORE_MIN_EXTENT_CELLS, CORE_SIGMA_CELLS, band_core
 from demseis.labels.crest import shear_field
 from demseis.labels.direction import DIRECTION_WINDOW, local_direction
 from demseis.labels.masks import fill_small_holes
-from demseis.diagnostics.toys import disk_pack, kinematic_fault
+from demseis_dev.toys import disk_pack, kinematic_fault
 
-from ._helpers import CELL, H, W, XF, centres, labels_of, planar_line
+from ._helpers import CELL, XF, H, W, centres, labels_of, planar_line
 
 
 def _band_core_ref(trace, t_r, t_c, field, rock, cohort, max_halfwidth, fraction=0.5):

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from demseis.types import Snapshot
 from demseis.errors import ConfigError, InputError
 from demseis.labels import LabelConfig, element_strain, strain_history
-from demseis.diagnostics.toys import kinematic_fault
+from demseis.types import Snapshot
+from demseis_dev.toys import kinematic_fault
 
 
 def gss(g):

@@ -7,24 +7,16 @@ import pytest
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from demseis.types import Snapshot
 from demseis.errors import ConfigError, InputError
-from demseis.labels import (
-    LabelConfig,
-    displacement_history,
-    element_strain,
-    label_maps,
-    mask_thickness_cells,
-    rasterise_strain,
-    strain_history,
-    thin_and_dilate,
-)
+from demseis.labels import (LabelConfig, displacement_history, element_strain, label_maps,
+                            mask_thickness_cells, rasterise_strain, strain_history,
+                            thin_and_dilate)
 from demseis.labels.centreline import prune_spurs
 from demseis.labels.masks import skeletonize
 from demseis.schema import SAMPLE_ARRAYS, SampleArray, engine_labels, sample_array
-from demseis.diagnostics.toys import fault_signed_distance, kinematic_fault
-from demseis.types import Grid
 from demseis.seismic.raster import rasterise
+from demseis.types import Grid, Snapshot
+from demseis_dev.toys import fault_signed_distance, kinematic_fault
 
 W, H, XF = 2000.0, 1000.0, 1200.0
 

@@ -7,7 +7,7 @@ import pytest
 
 from demseis.errors import InputError
 from demseis.labels import element_strain, neighbour_lists
-from demseis.diagnostics.toys import fault_signed_distance, kinematic_fault
+from demseis_dev.toys import fault_signed_distance, kinematic_fault
 
 
 def gamma_simple_shear(g: float) -> float:

@@ -13,26 +13,14 @@ import pytest
 from scipy import ndimage
 
 from demseis.errors import ConfigError, InputError
-from demseis.labels import (
-    LabelConfig,
-    _kernels,
-    displacement_history,
-    label_maps,
-    loop_count,
-    rung_fraction,
-    sample_facts,
-)
+from demseis.labels import (LabelConfig, _kernels, displacement_history, label_maps, loop_count,
+                            rung_fraction, sample_facts)
 from demseis.labels.direction import local_direction
 from demseis.labels.linking import trace_instances
-from demseis.diagnostics.toys import (
-    disk_pack,
-    fault_signed_distance,
-    kinematic_fault,
-    listric_fault,
-)
 from demseis.types import Grid, Snapshot
+from demseis_dev.toys import disk_pack, fault_signed_distance, kinematic_fault, listric_fault
 
-from ._helpers import CELL, H, W, XF, centres, labels_of, planar_line, snap_of
+from ._helpers import CELL, XF, H, W, centres, labels_of, planar_line, snap_of
 
 _NINE = np.ones((3, 3), dtype=bool)
 

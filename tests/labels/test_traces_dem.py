@@ -1,8 +1,8 @@
 """Slip-trace labels on a DEM run of the ``quick`` preset (slow: runs the DEM, ~10-30 s).
 
 The displacement jump at a cell is computed from the particles, independently of the trace
-extraction, by :func:`demseis.diagnostics.coverage.jump_field` (tested against a slow reference in
-tests/diagnostics/test_coverage.py).
+extraction, by :func:`demseis_dev.coverage.jump_field` (tested against a slow reference in
+tests/demseis_dev/test_coverage.py).
 """
 
 from __future__ import annotations
@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from demseis.diagnostics.coverage import jump_coverage, jump_field
 from demseis.generator.config.layout import grid_of
 from demseis.generator.config.sampling import plan_run
 from demseis.generator.config.settings import load_config
 from demseis.generator.engines import get_engine
 from demseis.labels import (displacement_history, label_maps, loop_count, rung_fraction,
                             sample_facts, strain_history)
+from demseis_dev.coverage import jump_coverage, jump_field
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,7 @@ from demseis.errors import ConfigError, InputError
 from demseis.seismic import (PropertyModel, draw_layer_properties, element_properties,
                              property_grids)
 from demseis.types import Grid
-from demseis.diagnostics.toys import faulted_sequence
+from demseis_dev.toys import faulted_sequence
 
 
 def test_defaults_validate_and_lists_become_tuples():

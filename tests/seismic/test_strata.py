@@ -6,13 +6,12 @@ import math
 import numpy as np
 import pytest
 
-from demseis.diagnostics.strata_stats import (adjacent_trace_correlation, column_reflectivity,
-                                              default_setup, flat_section,
-                                              zero_crossings)
 from demseis.errors import ConfigError, InputError
 from demseis.seismic import (BedModel, LayerProperties, PropertyModel, draw_layer_properties,
                              draw_strata, strata_properties)
 from demseis.seismic.strata import undulation_bound
+from demseis_dev.strata_stats import (adjacent_trace_correlation, column_reflectivity,
+                                      default_setup, flat_section, zero_crossings)
 
 
 def _props(n, seed=0):

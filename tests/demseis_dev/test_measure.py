@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from demseis.diagnostics.measure import (displacement_jump, horizon_profile, horizon_step,
-                                 section_length, slip_sense)
 from demseis.types import Snapshot
+from demseis_dev.measure import (displacement_jump, horizon_profile, horizon_step, section_length,
+                                 slip_sense)
 
 
 def snapshot(xy, layer, ids=None):
@@ -72,7 +72,7 @@ def test_section_length():
 
 def test_fault_crossings_follow_a_dipping_fault():
     # horizons 3 and 5 offset by 150 m across a 60-degree fault through (1000, 0)
-    from demseis.diagnostics.measure import fault_crossings
+    from demseis_dev.measure import fault_crossings
 
     x = np.arange(0.0, 2000.0, 5.0)
     xy, layer = [], []
@@ -91,7 +91,7 @@ def test_fault_crossings_follow_a_dipping_fault():
 # ---- dip of a fault per unit of layers (refraction), on a kinematic fault whose dip is imposed
 
 def _refracted(dips, zone_m, throw_m=100.0, x_m=3500.0, n_layers=24, unit=2, seed=1):
-    from demseis.diagnostics.toys import layered_pack, refracted_fault
+    from demseis_dev.toys import layered_pack, refracted_fault
 
     h = 2770.0
     ref = layered_pack(5000.0, h, n_layers, rng=np.random.default_rng(seed))
@@ -105,7 +105,7 @@ def _refracted(dips, zone_m, throw_m=100.0, x_m=3500.0, n_layers=24, unit=2, see
 
 @pytest.mark.parametrize("zone_m", [60.0, 150.0])
 def test_unit_dips_recover_an_imposed_refraction(zone_m):
-    from demseis.diagnostics.measure import unit_dips
+    from demseis_dev.measure import unit_dips
 
     dips = np.where(np.arange(12) % 2 == 0, 65.0, 50.0)  # strong units first, from the base
     ref, cur, units = _refracted(dips, zone_m)
@@ -119,7 +119,7 @@ def test_unit_dips_recover_an_imposed_refraction(zone_m):
 
 
 def test_unit_dips_of_a_straight_fault_show_no_refraction():
-    from demseis.diagnostics.measure import unit_dips
+    from demseis_dev.measure import unit_dips
 
     ref, cur, units = _refracted(np.full(12, 55.0), 60.0)
     got, _, _ = unit_dips(ref, cur, units, 3500.0)
@@ -128,7 +128,7 @@ def test_unit_dips_of_a_straight_fault_show_no_refraction():
 
 
 def test_step_line_mirrors_for_a_left_dipping_fault():
-    from demseis.diagnostics.measure import step_line
+    from demseis_dev.measure import step_line
 
     ref, cur, units = _refracted(np.full(12, 60.0), 60.0)
     sel = np.isin(ref.layer, (10, 11)) & (np.abs(ref.xy[:, 0] - 3000.0) < 400.0)
@@ -140,8 +140,8 @@ def test_step_line_mirrors_for_a_left_dipping_fault():
 
 
 def test_step_line_refuses_a_field_without_a_jump():
-    from demseis.diagnostics.measure import step_line
     from demseis.errors import InputError
+    from demseis_dev.measure import step_line
 
     xy = np.random.default_rng(0).uniform(0, 500, (200, 2))
     with pytest.raises(InputError, match="no displacement jump"):

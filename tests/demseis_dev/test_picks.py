@@ -8,12 +8,11 @@ import numpy as np
 import pytest
 
 import demseis
-from demseis.diagnostics.picks import (kinematic_agreement, planar_fault_sweep, shape_counts,
-                                       true_trace)
 from demseis.generator.config.layout import grid_of, trace_spacing
 from demseis.generator.config.sampling import SEED_DEM, plan_run, rng_at
 from demseis.generator.engines import get_engine
 from demseis.generator.engines.kinematic import kinematic_faults
+from demseis_dev.picks import kinematic_agreement, planar_fault_sweep, shape_counts, true_trace
 
 
 def _pooled(rows, key, weight):

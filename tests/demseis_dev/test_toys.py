@@ -1,9 +1,9 @@
-"""The toy inputs of demseis.diagnostics.toys: one kinematic fault model behind every toy."""
+"""The toy inputs of demseis_dev.toys: one kinematic fault model behind every toy."""
 
 import numpy as np
 
-from demseis.diagnostics.toys import (disk_pack, down_dip_vector, fault_signed_distance,
-                                      faulted_section, faulted_sequence, kinematic_fault)
+from demseis_dev.toys import (disk_pack, down_dip_vector, fault_signed_distance, faulted_section,
+                              faulted_sequence, kinematic_fault)
 
 
 def test_toy_sequence_geometry():

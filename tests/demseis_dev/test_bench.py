@@ -1,4 +1,5 @@
-"""`demseis bench`: dem (pack files and the settled-pack cache) and seismic print one JSON line."""
+"""`python -m demseis_dev.bench`: dem (pack files and the settled-pack cache) and seismic print
+one JSON line."""
 
 from __future__ import annotations
 
@@ -8,9 +9,8 @@ import numpy as np
 import pytest
 
 from demseis.dem import settle_pack
-from demseis.diagnostics.bench import dem_benchmark, load_pack
 from demseis.errors import InputError
-from demseis.cli import main
+from demseis_dev.bench import dem_benchmark, load_pack, main
 
 
 @pytest.fixture(scope="module")
@@ -43,7 +43,7 @@ def test_cli_bench_dem_with_pack(small_pack, tmp_path, capsys):
     p, _ = small_pack
     f = tmp_path / "pack.npz"
     np.savez(f, x=p.xy[:, 0], y=p.xy[:, 1], radius=p.radius)
-    assert main(["bench", "dem", "--pack", str(f), "--steps", "20"]) == 0
+    assert main(["dem", "--pack", str(f), "--steps", "20"]) == 0
     out = capsys.readouterr().out.strip().splitlines()
     assert len(out) == 1
     rec = json.loads(out[0])
@@ -64,12 +64,12 @@ def test_bad_pack_files(tmp_path, capsys):
     g.write_text("not a zip")
     with pytest.raises(InputError, match="readable"):
         load_pack(g)
-    assert main(["bench", "dem", "--pack", str(tmp_path / "nope.npz")]) == 2
+    assert main(["dem", "--pack", str(tmp_path / "nope.npz")]) == 2
     assert "no such file" in capsys.readouterr().err
 
 
 def test_bench_seismic_prints_one_json_line(capsys):
-    assert main(["bench", "seismic", "--nx", "64", "--nz", "36", "--repeats", "1"]) == 0
+    assert main(["seismic", "--nx", "64", "--nz", "36", "--repeats", "1"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
     assert len(lines) == 1
     rec = json.loads(lines[0])
@@ -77,4 +77,4 @@ def test_bench_seismic_prints_one_json_line(capsys):
     assert rec["ms_snapshot_1f"] > 0 and rec["ms_snapshot_3f"] > 0
     assert set(rec["components_ms"]) >= {"rasterise", "background", "smooth_vp_rho",
                                          "convolution_1f", "convolution_3f"}
-    assert main(["bench", "seismic", "--repeats", "0"]) == 2
+    assert main(["seismic", "--repeats", "0"]) == 2

@@ -15,9 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from demseis.evaluation.realism import adjacent_trace_correlation, zero_crossings
-from demseis.seismic import (BedModel, PropertyModel, Strata, draw_layer_properties,
-                             draw_strata, interface_times, reflectivity, strata_properties,
-                             synthetic_sections)
+from demseis.seismic import (BedModel, PropertyModel, Strata, draw_layer_properties, draw_strata,
+                             interface_times, reflectivity, strata_properties, synthetic_sections)
 
 
 def default_setup(seed: int = 0, model: BedModel | None = None, n_layers: int = 48,

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from demseis.errors import InputError
-from demseis.diagnostics.coverage import jump_coverage, jump_field
 from demseis.labels import rasterise_strain
 from demseis.seismic.raster import rasterise
-from demseis.diagnostics.toys import disk_pack
 from demseis.types import Grid, Snapshot
+from demseis_dev.coverage import jump_coverage, jump_field
+from demseis_dev.toys import disk_pack
 
 
 def _jump_reference(u, coh, reach):

@@ -7,8 +7,8 @@ import math
 import pytest
 
 from demseis.dem import Material
-from demseis.diagnostics.calibrate import biaxial_test, mohr_coulomb_fit
 from demseis.errors import InputError
+from demseis_dev.calibrate import biaxial_test, mohr_coulomb_fit
 
 
 def test_mohr_coulomb_fit_recovers_known_envelope():

@@ -1,4 +1,5 @@
-"""The code behind ``demseis bench dem|seismic|labels|loader``; each returns one JSON-ready dict.
+"""Speed benchmarks of the stages, each returning one JSON-ready dict; run from a checkout as
+``python -m demseis_dev.bench dem|seismic|labels|loader`` (one JSON line each).
 
 - ``dem`` (:func:`dem_benchmark`): DEM kernel throughput. The frictional model (default
   :class:`Material`) on a settled pack with fixed walls at the pack's left, right and bottom,
@@ -30,6 +31,8 @@ hits both alike.
 
 from __future__ import annotations
 
+import argparse
+import json
 import os
 import shutil
 import statistics
@@ -40,25 +43,19 @@ from pathlib import Path
 
 import numpy as np
 
-from demseis.datasets.dataset import FaultSegDataset, ShardAwareSampler, crop_offsets
 from demseis.datasets import create_store, finalize_store, write_shard
+from demseis.datasets.dataset import FaultSegDataset, ShardAwareSampler, crop_offsets
 from demseis.dem.assembly import Pack, settle_pack
 from demseis.dem.integrator import Integrator
 from demseis.dem.types import Material
-from demseis.diagnostics.toys import disk_pack, faulted_sequence, kinematic_fault
 from demseis.errors import InputError, import_torch
 from demseis.labels import LabelConfig, displacement_history, label_maps, strain_history
 from demseis.seismic.forward import synthetic_sections
-from demseis.seismic.properties import (
-    PropertyModel,
-    draw_layer_properties,
-    element_properties,
-    fill_background,
-    property_grids,
-    smooth,
-)
+from demseis.seismic.properties import (PropertyModel, draw_layer_properties, element_properties,
+                                        fill_background, property_grids, smooth)
 from demseis.seismic.raster import rasterise
 from demseis.types import Grid, Snapshot, load_snapshots
+from demseis_dev.toys import disk_pack, faulted_sequence, kinematic_fault
 
 SEED_WIDTH_M = 5000.0
 SEED_HEIGHT_M = 2770.0
@@ -162,7 +159,7 @@ def seismic_benchmark(nx: int = 512, nz: int = 288, cell_m: float = 10.0, repeat
                       npz: str | None = None) -> dict:
     """Time the render of one faulted toy snapshot (``nx`` x ``nz`` cells of ``cell_m``).
 
-    The snapshot is the last (throw 450 m) of :func:`demseis.diagnostics.toys.faulted_sequence`
+    The snapshot is the last (throw 450 m) of :func:`demseis_dev.toys.faulted_sequence`
     over ``nx cell_m`` x ``nz cell_m`` m (about 11,800 disks at 512 x 288). Timed, as medians
     of ``repeats`` runs after one warm-up (Numba compiled and cached): element properties,
     rasterisation, background fill, smoothing of both grids, the convolution for one frequency
@@ -392,7 +389,7 @@ def loader_benchmark(
     progress: bool = False,
 ) -> dict:
     """Build the data, time both loaders, return the result dict (one JSON line's worth)."""
-    torch = import_torch("demseis bench loader")  # heavy: only this benchmark needs it
+    torch = import_torch("python -m demseis_dev.bench loader")  # heavy: only this benchmark needs it
     from torch.utils.data import DataLoader, RandomSampler
 
     torch.set_num_threads(1)
@@ -456,3 +453,110 @@ def loader_benchmark(
         return result
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+def _parser() -> argparse.ArgumentParser:
+    """The command line: ``python -m demseis_dev.bench dem|seismic|labels|loader``."""
+    ap = argparse.ArgumentParser(prog="python -m demseis_dev.bench",
+                                 description="Speed benchmarks printing one JSON line each.")
+    bench = ap.add_subparsers(dest="target", metavar="TARGET", required=True)
+    p = bench.add_parser("dem", help="DEM kernel throughput (element-steps per second)")
+    p.add_argument("--pack", default=None,
+                   help=".npz with arrays x, y, radius (m); default: the seed-scale pack "
+                        "(5 km x 2.77 km), settled once and cached")
+    p.add_argument("--steps", type=int, default=2000, help="timed steps (default 2000)")
+    p.set_defaults(func=cmd_dem)
+
+    p = bench.add_parser(
+        "seismic",
+        help="ms per rendered snapshot/section at 512x288 (1 and 3 frequencies)",
+        description="Time the whole per-snapshot seismic render (element properties, "
+                    "rasterisation, background, smoothing, time-domain Ricker convolution back "
+                    "to depth) of a faulted toy disk pack; prints one JSON line.",
+    )
+    p.add_argument("--nx", type=int, default=512, help="grid columns (default 512)")
+    p.add_argument("--nz", type=int, default=288, help="grid rows (default 288)")
+    p.add_argument("--repeats", type=int, default=7, help="timed repeats, median (default 7)")
+    p.add_argument("--npz", help="render the last snapshot of this .npz (demseis.types."
+                                 "save_snapshots, e.g. saved from a DEM run) instead of the "
+                                 "kinematic toy pack")
+    p.set_defaults(func=cmd_seismic)
+
+    p = bench.add_parser("labels", help="strain history and label maps on ~11k elements")
+    p.add_argument("--snapshots", type=int, default=6, help="number of snapshots (>= 2)")
+    p.add_argument("--repeats", type=int, default=5, help="timed repeats (median reported)")
+    p.set_defaults(func=cmd_labels)
+
+    p = bench.add_parser("loader", help="DataLoader throughput vs NumPy memmap (256x256 crops)")
+    p.add_argument("--shards", type=int, default=48, help="shards in the temporary store")
+    p.add_argument("--samples-per-shard", type=int, default=32)
+    p.add_argument("--shape", type=int, nargs=2, default=(277, 500), metavar=("H", "W"))
+    p.add_argument("--crop", type=int, default=256)
+    p.add_argument("--batch-size", type=int, default=32)
+    p.add_argument("--repeats", type=int, default=5)
+    p.add_argument("--workers", type=int, nargs="+", default=(0, 2))
+    p.add_argument("--dir", default=None, help="where to build the temporary store")
+    p.set_defaults(func=cmd_loader)
+    return ap
+
+
+def cmd_dem(args: argparse.Namespace) -> int:
+    if args.steps < 1:
+        raise InputError(f"--steps {args.steps}: must be >= 1")
+    if args.pack:
+        xy, r = load_pack(args.pack)
+    else:
+        print("demseis: settling the seed-scale pack (cached after the first time)...",
+              file=sys.stderr)
+        pack = seed_pack()
+        xy, r = pack.xy, pack.radius
+    print(json.dumps(dem_benchmark(xy, r, n_steps=args.steps)))
+    return 0
+
+
+def cmd_seismic(args: argparse.Namespace) -> int:
+    for name in ("nx", "nz", "repeats"):
+        if getattr(args, name) < 1:
+            raise InputError(f"--{name} must be >= 1, got {getattr(args, name)}")
+    if args.npz is not None and not os.path.isfile(args.npz):
+        raise InputError(f"--npz {args.npz!r} is not a file")
+    print(json.dumps(seismic_benchmark(nx=args.nx, nz=args.nz, repeats=args.repeats,
+                                       npz=args.npz)))
+    return 0
+
+
+def cmd_labels(args: argparse.Namespace) -> int:
+    if args.snapshots < 2 or args.repeats < 1:
+        raise InputError(f"--snapshots must be >= 2 and --repeats >= 1; got {args.snapshots}, "
+                         f"{args.repeats}")
+    print(json.dumps(labels_benchmark(n_snapshots=args.snapshots, repeats=args.repeats)))
+    return 0
+
+
+def cmd_loader(args: argparse.Namespace) -> int:
+    result = loader_benchmark(
+        n_shards=args.shards,
+        samples_per_shard=args.samples_per_shard,
+        shape=tuple(args.shape),
+        crop=args.crop,
+        batch_size=args.batch_size,
+        repeats=args.repeats,
+        workers=tuple(args.workers),
+        workdir=args.dir,
+        progress=sys.stderr.isatty(),
+    )
+    print(json.dumps(result))
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one benchmark; a bad argument is one line on stderr and exit status 2."""
+    args = _parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except InputError as exc:
+        print(f"python -m demseis_dev.bench: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
