@@ -71,7 +71,7 @@ def test_more_workers_than_cores_is_warned(monkeypatch, tmp_path, capsys):
         seen.update(kw)
         raise Done
 
-    monkeypatch.setattr(demseis.api, "generate", fake_generate)
+    monkeypatch.setattr("demseis.cli.commands.generate.generate", fake_generate)
     too_many = (os.cpu_count() or 1) + 1
     with pytest.raises(Done):
         main(["generate", "--preset", "tiny", "--out", str(tmp_path / "x.zarr"),

@@ -87,7 +87,7 @@ def test_a_fitted_config_measures_like_its_section(tmp_path):
     assert "| dominant period samples |" in (tmp_path / "fit.toml").read_text()
 
 
-def test_fit_command_asks_for_the_sampling_of_an_image(tmp_path):
+def testcmd_fit_asks_for_the_sampling_of_an_image(tmp_path):
     from PIL import Image
 
     Image.fromarray((np.random.default_rng(0).random((40, 30)) * 255).astype(np.uint8)).save(

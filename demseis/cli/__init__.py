@@ -1,14 +1,17 @@
 """The ``demseis`` command line: one module per command group, each thin over the library.
 
-- :mod:`demseis.cli.generate`: ``generate``, ``render``
-- :mod:`demseis.cli.store`: ``info``, ``validate``, ``export-segy``
+- :mod:`demseis.cli.generate`: ``generate``, ``render``, ``relabel``, ``params``
+- :mod:`demseis.cli.store`: ``info``, ``validate``, ``export-segy``, ``migrate``
 - :mod:`demseis.cli.plots`: ``plot``, ``preview``
-- :mod:`demseis.cli.evaluate`: ``score``, ``baseline``, ``realism``
+- :mod:`demseis.cli.evaluate`: ``score``, ``baseline``, ``fit``, ``realism``
 - :mod:`demseis.cli.model`: ``train``, ``predict``
 
-Each module has ``register(sub)``, where ``sub`` is the top-level subparsers object. A handler is ``func(args) -> int`` set with ``parser.set_defaults(func=...)``.
-Handlers import what they run (the library, NumPy, dask, torch, matplotlib) inside themselves, so
-``--help`` is fast.
+Each of these modules holds parsers only: ``register(sub)`` adds its commands to ``sub``, the
+top-level subparsers object, and names each command's handler ``"group:function"``
+(``parser.set_defaults(func="generate:cmd_generate")``). The handlers, ``func(args) -> int``,
+are in :mod:`demseis.cli.commands` (one module per group), which import what they run (the
+library, NumPy, dask, torch, matplotlib) at their top; :func:`handler` imports the group of the
+command that runs, so ``--help`` imports none of them and stays fast.
 
 Any :class:`demseis.errors.DemseisError` becomes one line on stderr and its exit code (2 for
 usage and input errors); argparse's own usage errors also exit 2.
@@ -17,11 +20,12 @@ usage and input errors); argparse's own usage errors also exit 2.
 from __future__ import annotations
 
 import argparse
+import importlib
 import logging
 import os
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import NoReturn
 
 from demseis import __version__, interrupts
@@ -54,6 +58,14 @@ def build_parser() -> argparse.ArgumentParser:
         module.register(sub)
     _describe(sub)
     return parser
+
+
+def handler(name: str) -> Callable[[argparse.Namespace], int]:
+    """The handler a parser names ``"group:function"``: ``function`` of
+    :mod:`demseis.cli.commands.<group>`, imported now (only the command that runs pays for what
+    its handlers import)."""
+    group, _, function = name.partition(":")
+    return getattr(importlib.import_module(f"demseis.cli.commands.{group}"), function)
 
 
 def _describe(sub: argparse._SubParsersAction) -> None:
@@ -111,7 +123,7 @@ def _main(argv: Sequence[str] | None) -> int:
         if not getattr(args, "func", None):
             parser.print_help()
             return 2
-        code = int(args.func(args) or 0)
+        code = int(handler(args.func)(args) or 0)
         if interrupts.interrupted():  # swallowed where it landed, and the command completed
             raise interrupts.Finished
         sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit

@@ -5,10 +5,11 @@ extra); see :mod:`demseis.learning.model`."""
 from __future__ import annotations
 
 import argparse
-import sys
 
 from demseis.cli._args import nonneg_int, pos_int
-from demseis.errors import InputError
+
+# Each handler is named "model:FUNCTION", a function of demseis.cli.commands.model,
+# imported when its command runs (demseis.cli), so that `demseis --help` stays light.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -47,7 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--resume", action="store_true", help="continue from OUT.ckpt")
     t.add_argument("--threads", type=pos_int, default=None, help="torch CPU threads")
     t.add_argument("--quiet", action="store_true", help="no progress bar or log lines")
-    t.set_defaults(func=_train_command)
+    t.set_defaults(func="model:cmd_train")
 
     p = sub.add_parser(
         "predict", help="fault probability of a SEG-Y or .npy section with a trained model",
@@ -71,52 +72,4 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--png", default=None,
                    help="also draw the section with the prediction over it (as demseis plot "
                    "SECTION --pred OUT does) into this PNG")
-    p.set_defaults(func=_predict_command)
-
-
-def _weights(text: str | None) -> list[float] | None:
-    """``--weights 2,1`` as numbers; their count and sign are checked with the stores."""
-    if text is None:
-        return None
-    try:
-        return [float(w) for w in text.split(",")]
-    except ValueError:
-        raise InputError(f"--weights {text!r}: give one number per store, comma-separated, "
-                         "e.g. 2,1") from None
-
-
-def _train_command(args: argparse.Namespace) -> int:
-    from demseis.api import train
-
-    quiet = args.quiet
-    metrics = train(args.store, args.out, weights=_weights(args.weights), steps=args.steps, crop=args.crop, batch=args.batch,
-          base=args.base, lr=args.lr, seed=args.seed, device=args.device,
-          val_every=args.val_every, save_every=args.save_every, resume=args.resume,
-          threads=args.threads, progress=not quiet and sys.stderr.isatty(),
-          log=None if quiet else print)
-    for text in metrics.get("warnings", []):
-        print(f"demseis: warning: {text}", file=sys.stderr)
-    return 0
-
-
-def _predict_command(args: argparse.Namespace) -> int:
-    from demseis.api import predict
-
-    if len(args.paths) > 2:
-        raise InputError(f"predict takes [MODEL] IN, got {len(args.paths)} paths: "
-                         + " ".join(args.paths))
-    if len(args.paths) == 2:
-        if args.model is not None:
-            raise InputError("give the model once: predict MODEL IN, or predict IN --model "
-                             "MODEL")
-        model, source = args.paths
-    else:
-        model, source = args.model, args.paths[0]
-    out = predict(model, source, args.out, device=args.device, overwrite=args.overwrite,
-                  progress=sys.stderr.isatty())
-    print(f"wrote {out}")
-    if args.png is not None:
-        from demseis.plotting import plot_section
-
-        print(f"wrote {plot_section(source, args.png, pred=out)}")
-    return 0
+    p.set_defaults(func="model:cmd_predict")

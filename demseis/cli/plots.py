@@ -6,8 +6,8 @@ import argparse
 
 from demseis.cli._args import nonneg_int
 
-# The handlers below import demseis.plotting (matplotlib, the whole pipeline) inside themselves,
-# so that `demseis --help` imports none of it (see demseis.cli).
+# Each handler is named "plots:FUNCTION", a function of demseis.cli.commands.plots,
+# imported when its command runs (demseis.cli), so that `demseis --help` stays light.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -16,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("source", metavar="SOURCE", help="a TOML config, a preset name, or a store")
     p.add_argument("--out", required=True, help="output directory for the PNG files")
     p.add_argument("--run", type=nonneg_int, default=0, help="run index (default 0)")
-    p.set_defaults(func=cmd_preview)
+    p.set_defaults(func="plots:cmd_preview")
 
     p = sub.add_parser("plot", help="PNG of a stored sample, or of a section with its prediction",
                        description="STORE: one stored sample (section, fault label, damage "
@@ -38,38 +38,4 @@ def register(sub: argparse._SubParsersAction) -> None:
     line.add_argument("--crossline", type=int, default=None,
                       help="of a 3-D SEG-Y cube: the crossline number")
     p.add_argument("--out", required=True, help="output PNG path")
-    p.set_defaults(func=cmd_plot)
-
-
-def cmd_preview(args: argparse.Namespace) -> int:
-    from demseis.plotting import preview
-
-    for p in preview(args.source, args.out, run=args.run):
-        print(p)
-    return 0
-
-
-def cmd_plot(args: argparse.Namespace) -> int:
-    import os
-
-    from demseis.errors import InputError
-    from demseis.evaluation.fieldio import MASK_SUFFIXES
-    from demseis.plotting import plot_sample, plot_section
-
-    section_file = not os.path.isdir(args.source) and args.source.lower().endswith(MASK_SUFFIXES)
-    if section_file:
-        if args.sample is not None:
-            raise InputError(f"--sample is for a store; {args.source!r} is a section file")
-        line = (("inline", args.inline) if args.inline is not None else
-                ("crossline", args.crossline) if args.crossline is not None else None)
-        print(plot_section(args.source, args.out, pred=args.pred, labels=args.labels,
-                           threshold=args.threshold, line=line))
-        return 0
-    given = [f for f, v in (("--pred", args.pred), ("--labels", args.labels),
-                            ("--threshold", args.threshold), ("--inline", args.inline),
-                            ("--crossline", args.crossline)) if v is not None]
-    if given:
-        raise InputError(f"{given[0]} is for a section file (.sgy, .segy, .npy, .png); "
-                         f"{args.source!r} is read as a store")
-    print(plot_sample(args.source, args.sample or 0, args.out))
-    return 0
+    p.set_defaults(func="plots:cmd_plot")

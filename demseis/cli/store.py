@@ -7,17 +7,16 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
-# The handlers below import the modules they run inside themselves, so that `demseis --help`
-# imports none of them (see demseis.cli).
+# Each handler is named "store:FUNCTION", a function of demseis.cli.commands.store,
+# imported when its command runs (demseis.cli), so that `demseis --help` stays light.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``info``, ``validate``, ``export-segy`` and ``migrate``."""
     p = sub.add_parser("info", help="summarise a store: samples, shapes, parameter ranges, config")
     p.add_argument("path", metavar="STORE", help="store path")
-    p.set_defaults(func=cmd_info)
+    p.set_defaults(func="store:cmd_info")
 
     p = sub.add_parser(
         "validate",
@@ -30,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("path", metavar="STORE", help="store directory")
     p.add_argument("--no-particles", action="store_true",
                    help="skip reading the stored particle snapshots")
-    p.set_defaults(func=cmd_validate)
+    p.set_defaults(func="store:cmd_validate")
 
     p = sub.add_parser(
         "export-segy",
@@ -42,7 +41,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sample", type=int, required=True, metavar="I", help="sample index")
     p.add_argument("--out", required=True, metavar="FILE.sgy", help="SEG-Y file to write")
     p.add_argument("--overwrite", action="store_true", help="replace FILE.sgy if it exists")
-    p.set_defaults(func=cmd_export_segy)
+    p.set_defaults(func="store:cmd_export_segy")
 
     p = sub.add_parser(
         "migrate",
@@ -54,38 +53,4 @@ def register(sub: argparse._SubParsersAction) -> None:
         "rebuilds the parameter index.",
     )
     p.add_argument("path", metavar="STORE", help="store directory")
-    p.set_defaults(func=cmd_migrate)
-
-
-def cmd_info(args: argparse.Namespace) -> int:
-    from demseis.api import open as open_store
-    from demseis.generator.sweep.faultinfo import fault_distribution
-
-    print("\n".join([open_store(args.path).summary(), *fault_distribution(args.path)]))
-    return 0
-
-
-def cmd_validate(args: argparse.Namespace) -> int:
-    from demseis.datasets.validate import validate_store
-
-    report = validate_store(args.path, check_particles=not args.no_particles,
-                            progress=sys.stderr.isatty())
-    for line in report.problems:
-        print(line)
-    print(report.summary())
-    return 0 if report.ok else 1
-
-
-def cmd_export_segy(args: argparse.Namespace) -> int:
-    from demseis.datasets.read import export_segy
-
-    out = export_segy(args.store, args.sample, args.out, overwrite=args.overwrite)
-    print(f"wrote {out}", file=sys.stderr)
-    return 0
-
-
-def cmd_migrate(args: argparse.Namespace) -> int:
-    from demseis.datasets.migrate import migrate_store
-
-    print(migrate_store(args.path, progress=sys.stderr.isatty()).summary())
-    return 0
+    p.set_defaults(func="store:cmd_migrate")

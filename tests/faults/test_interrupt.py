@@ -93,15 +93,14 @@ def test_render_progress_bar_is_labelled_render(tmp_path, capsys):
 def test_ctrl_c_of_a_read_only_command_says_nothing_about_resuming(tmp_path, monkeypatch,
                                                                    capsys, command):
     """issue 30: a read-only command has nothing to resume; its interrupt is one plain line."""
-    import demseis.datasets.validate as validate
-    import demseis.generator.sweep.faultinfo as faultinfo
+    import demseis.cli.commands.store as handlers
     from demseis.cli import main
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(validate, "validate_store", interrupted)
-    monkeypatch.setattr(faultinfo, "fault_distribution", interrupted)
+    monkeypatch.setattr(handlers, "validate_store", interrupted)
+    monkeypatch.setattr(handlers, "fault_distribution", interrupted)
     monkeypatch.setattr("demseis.api.store_summary", interrupted)
     from tests.datasets._helpers import make_store
 
@@ -115,7 +114,7 @@ def test_ctrl_c_inside_a_class_creation_is_an_interrupt(tmp_path, monkeypatch, c
     classes, imported as a sweep's cluster starts) into "RuntimeError: Error calling
     __set_name__" caused by the KeyboardInterrupt: the CLI says its one line, exit 130; any
     other RuntimeError still propagates."""
-    import demseis.datasets.validate as validate
+    import demseis.cli.commands.store as handlers
     from demseis.cli import main
 
     class Name:
@@ -128,14 +127,14 @@ def test_ctrl_c_inside_a_class_creation_is_an_interrupt(tmp_path, monkeypatch, c
     from tests.datasets._helpers import make_store
 
     make_store(tmp_path / "s.zarr")
-    monkeypatch.setattr(validate, "validate_store", create_class)
+    monkeypatch.setattr(handlers, "validate_store", create_class)
     assert main(["validate", str(tmp_path / "s.zarr")]) == 130
     assert capsys.readouterr().err.strip() == "demseis: interrupted"
 
     def other(*args, **kwargs):
         raise RuntimeError("not an interrupt")
 
-    monkeypatch.setattr(validate, "validate_store", other)
+    monkeypatch.setattr(handlers, "validate_store", other)
     with pytest.raises(RuntimeError, match="not an interrupt"):
         main(["validate", str(tmp_path / "s.zarr")])
 
