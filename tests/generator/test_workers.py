@@ -50,7 +50,8 @@ def test_unknown_method_from_the_cli_exits_2(tmp_path):
 def test_forked_workers_start_with_the_kernels_loaded(monkeypatch):
     """A forked worker has every kernel of a run loaded before its first task (the preload);
     a spawned one has none, and would load them in its first task."""
-    from demseis.generator.sweep.driver import SweepSummary, _start_local_cluster
+    from demseis.generator.sweep.cluster import _start_local_cluster
+    from demseis.generator.sweep.driver import warm_numba_cache
 
     def loaded_signatures() -> dict[str, int]:
         import sys as worker_sys
@@ -63,8 +64,7 @@ def test_forked_workers_start_with_the_kernels_loaded(monkeypatch):
     seen = {}
     for method in ("forkserver", "spawn"):
         monkeypatch.setenv("DEMSEIS_WORKER_START", method)
-        summary = SweepSummary(store="", n_shards=0, samples_per_shard=0, done_before=0)
-        client, cluster = _start_local_cluster(summary, 1, 0)
+        client, cluster = _start_local_cluster(warm_numba_cache, {}, 1, 0)
         try:
             seen[method] = list(client.run(loaded_signatures).values())[0]
         finally:

@@ -8,15 +8,11 @@ resumes where it stopped and gives the same bytes as an uninterrupted one.
 
 from __future__ import annotations
 
-import contextlib
-import itertools
+import functools
 import json
-import logging
 import os
 import shutil
-import signal
 import sys
-import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,7 +28,7 @@ from demseis.datasets import (ParamSpec, create_store, finalize_store, read_stor
 from demseis.datasets.index import update_index
 from demseis.datasets.layout import root_metadata_lost
 from demseis.datasets.lock import pid_alive
-from demseis.errors import ConfigError, InputError, SimulationError, StoreError
+from demseis.errors import ConfigError, SimulationError, StoreError
 from demseis.generator.config.layout import (array_dtypes, grid_of, on_grid, param_codes,
                                              param_dtypes, sample_shape, trace_spacing)
 from demseis.generator.config.params import _json_value
@@ -40,12 +36,8 @@ from demseis.generator.config.sampling import run_params
 from demseis.generator.config.settings import Config, load_config, parse_config
 from demseis.generator.engines import get_engine
 from demseis.generator.sweep.pipeline import run_shard
-from demseis.generator.sweep.workers import (main_module_hidden, set_worker_env, sigint_ignored,
-                                             start_forkserver, worker_start_method)
+from demseis.generator.sweep.workers import sigint_deferred
 from demseis.parameters import PARAMS, SAMPLING_STORED, SCENARIO, STORED
-
-# dask and distributed (and psutil, which comes with them) are imported inside the functions
-# that start or reach a cluster: ~1 s of imports that a sweep with --workers 0 never needs
 
 
 @dataclass
@@ -391,10 +383,13 @@ def _run_sweep(
     """
     out = Path(out)
     t0 = time.perf_counter()
-    remote = _connect(scheduler) if scheduler is not None else None  # fail before writing
+    cluster = None
+    if workers != 0 or scheduler is not None:
+        import demseis.generator.sweep.cluster as cluster  # dask: a sweep with workers only
+    remote = cluster.connect(scheduler) if scheduler is not None else None  # before writing
     existed = out.exists()
     try:
-        with _sigint_deferred():  # a store is created whole: Ctrl-C waits for the metadata
+        with sigint_deferred():  # a store is created whole: Ctrl-C waits for the metadata
             status = prepare_store(cfg, out, overwrite=overwrite)
     except BaseException:
         if remote is not None:
@@ -421,15 +416,21 @@ def _run_sweep(
             else:
                 # absolute: a worker's working directory is its forkserver's, which may differ
                 # from this process's (a notebook that changed directory since)
-                _run_distributed(str(out.absolute()), cfg, pending, summary, bar, workers, remote,
-                                 retries)
+                task = functools.partial(shard_task, str(out.absolute()), cfg_dict)
+                summary.compute_seconds = cluster.run_distributed(
+                    # longest runs first (LPT): fewer workers idle at the end of unequal runs
+                    task, sorted(pending, key=lambda s: -run_cost(cfg, s)),
+                    on_result=lambda result: _account(summary, bar, result),
+                    on_failure=summary.failed.__setitem__, warm=warm_numba_cache,
+                    phase_seconds=summary.phase_seconds, workers=workers, remote=remote,
+                    retries=retries)
     finally:
         bar.close()
         if remote is not None and not pending:
             remote.close()
     t_fin = time.perf_counter()
     # every run was written (none failed): a Ctrl-C now leaves nothing to resume
-    with _sigint_deferred(KeyboardInterrupt if summary.failed else interrupts.Finished):
+    with sigint_deferred(KeyboardInterrupt if summary.failed else interrupts.Finished):
         record_failures(out, summary.failed)
         finalize_store(out)
     summary.phase_seconds["finalize"] = time.perf_counter() - t_fin
@@ -469,234 +470,9 @@ def _account(summary: SweepSummary, bar: Any, result: dict[str, Any]) -> None:
             summary.index_updated = time.perf_counter()
 
 
-def _connect(scheduler: str) -> Any:
-    """A client of the dask scheduler at ``scheduler``; InputError if it cannot be reached."""
-    from distributed import Client  # lazy: cluster only (see the imports above)
-
-    try:
-        return Client(scheduler, timeout="20s")
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise InputError(f"--scheduler {scheduler!r}: cannot connect ({exc})") from None
-
-
-def _run_distributed(store: str, cfg: Config, pending: list[int], summary: SweepSummary,
-                     bar: Any, workers: int | None, remote: Any, retries: int) -> None:
-    from distributed import as_completed  # lazy: cluster only (see the imports above)
-
-    cluster = None
-    t_start = time.perf_counter()
-    # Ctrl-C reaches the terminal's whole process group: the worker processes ignore it (see
-    # _start_local_cluster) and the driver closes the cluster in the ``finally`` below, so an
-    # interrupted sweep prints no worker traceback and leaks no semaphore.
-    client = None
-    hidden = contextlib.ExitStack()
-    try:
-        if remote is not None:
-            client = remote
-        else:
-            # the caller's __main__ stays hidden while the cluster lives: dask restarts a
-            # crashed worker in a new process (demseis.generator.sweep.workers)
-            hidden.enter_context(main_module_hidden())
-            client, cluster = _start_local_cluster(summary, workers, retries)
-        summary.phase_seconds["start"] = time.perf_counter() - t_start
-        t_compute = time.perf_counter()
-        # longest runs first (LPT): fewer workers idle at the end of a sweep of unequal runs
-        cfg_dict = cfg.to_dict()
-        order = sorted(pending, key=lambda s: -run_cost(cfg, s))
-        shard_of: dict[str, int] = {}
-
-        def submit(rank: int, s: int) -> Any:
-            fut = client.submit(shard_task, store, cfg_dict, s, retries=retries, pure=False,
-                                priority=len(order) - rank, key=f"demseis-shard-{s}-{os.getpid()}")
-            shard_of[fut.key] = s
-            return fut
-
-        # A bounded window of tasks in flight, refilled as they finish: submitting a 100,000-run
-        # sweep at once, and cancelling it on Ctrl-C, each cost tens of seconds; with the window
-        # both cost what the few tasks in flight cost.
-        queue = iter(enumerate(order))
-        window = max(SUBMIT_WINDOW, 4 * len(client.scheduler_info().get("workers", {})))
-        running = as_completed([submit(rank, s) for rank, s in itertools.islice(queue, window)])
-        while not running.is_empty():
-            # a Ctrl-C swallowed where it landed (a __del__, a weakref callback) is raised here:
-            # polled every 0.1 s, not only when a task finishes (a DEM run takes minutes)
-            interrupts.raise_if_interrupted()
-            batch = running.next_batch(block=False)
-            if not batch:
-                time.sleep(0.1)
-                continue
-            for fut in batch:
-                if fut.status == "finished":
-                    _account(summary, bar, fut.result())
-                else:
-                    exc = fut.exception()
-                    summary.failed[shard_of[fut.key]] = f"{type(exc).__name__}: {exc}"
-                shard_of.pop(fut.key, None)
-                nxt = next(queue, None)
-                if nxt is not None:
-                    running.add(submit(*nxt))
-        summary.compute_seconds = time.perf_counter() - t_compute
-        summary.phase_seconds["compute"] = summary.compute_seconds
-    except BaseException:
-        _quiet_dask_logs()  # the scheduler would log the tasks cancelled by the shut-down
-        raise
-    finally:
-        t_close = time.perf_counter()
-        with _sigint_deferred():  # a second Ctrl-C does not cut the clean shut-down short
-            if client is not None:
-                client.close()
-            if cluster is not None:
-                cluster.close()
-            hidden.close()
-        summary.phase_seconds["close"] = time.perf_counter() - t_close
-
-
 #: seconds between the driver's updates of the parameter table's index while a sweep runs
 #: (and once at its end: finalize_store)
 INDEX_EVERY_S = 60.0
-
-#: tasks a sweep keeps submitted at least (4 per worker where there are more workers)
-SUBMIT_WINDOW = 64
-
-
-def _quiet_dask_logs() -> None:
-    """Only CRITICAL from dask's loggers in this process (an interrupted sweep shutting down)."""
-    for name in list(logging.root.manager.loggerDict):
-        if name == "distributed" or name.startswith("distributed."):
-            logging.getLogger(name).setLevel(logging.CRITICAL)
-
-
-@contextlib.contextmanager
-def _sigint_deferred(raises: type[KeyboardInterrupt] = KeyboardInterrupt) -> Any:
-    """Hold SIGINT in the main thread for the block; one that arrived is raised at its end (as
-    ``raises``: :class:`demseis.interrupts.Finished` where the block completes the work)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    got: list[int] = []
-    old = signal.signal(signal.SIGINT, lambda signum, frame: got.append(signum))
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
-    if got:
-        raise raises
-
-
-def _wait_spawned(n: int, timeout_s: float = 60.0) -> None:
-    """Wait until ``n`` worker processes (multiprocessing spawn children) exist."""
-    import psutil  # lazy: cluster only, and a dependency of distributed, not of demseis
-
-    me = psutil.Process()
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        found = 0
-        for child in me.children(recursive=True):
-            try:
-                found += "spawn_main" in " ".join(child.cmdline())
-            except (psutil.NoSuchProcess, psutil.ZombieProcess, psutil.AccessDenied):
-                continue
-        if found >= n:
-            return
-        time.sleep(0.01)
-
-
-#: dask's periodic work turned down for a local sweep: a task is one long Numba call that holds
-#: the GIL, so the worker's stack sampler (every 10 ms), the event-loop tick (20 ms) and the
-#: system and nanny memory monitors (the nannies run in the driver) mostly wait for the GIL and
-#: take CPU from the tasks on a small machine (the driver's CPU time and the 2-worker speed-up
-#: with and without them: CHANGELOG, "Measured performance"). The settings reach the spawned
-#: workers with the config.
-QUIET_DASK = {
-    "distributed.worker.profile.enabled": False,
-    "distributed.admin.tick.interval": "1s",
-    "distributed.admin.system-monitor.interval": "2s",
-    "distributed.worker.memory.monitor-interval": "1s",
-}
-
-
-def _start_local_cluster(summary: SweepSummary, workers: int | None, retries: int) -> tuple[Any, Any]:
-    """A LocalCluster of single-threaded worker processes and its client, the Numba cache warm.
-
-    With the forkserver (:func:`demseis.generator.sweep.workers.worker_start_method`), the server warms
-    the cache once before it forks any worker. With spawn, the cache is warmed in a thread of
-    the driver while the worker processes start: tasks are submitted only after both, so no
-    worker compiles a kernel the driver is compiling.
-    """
-    # lazy: cluster only (see the imports above); _worker imports distributed
-    import dask
-    from distributed import Client, LocalCluster
-
-    from demseis.generator.sweep._worker import IgnoreSigint
-
-    warm_errors: list[BaseException] = []
-
-    def warm() -> None:
-        t_warm = time.perf_counter()
-        try:
-            warm_numba_cache()
-            summary.phase_seconds["warm"] = time.perf_counter() - t_warm
-        except BaseException as exc:  # re-raised in the driver below
-            warm_errors.append(exc)
-
-    n = workers or os.cpu_count() or 1
-    env = set_worker_env()
-    method = worker_start_method()
-    warmer = None
-    if method == "forkserver":
-        start_forkserver()  # a no-op when demseis.api.generate started it already
-        import distributed.utils  # lazy: cluster only (see the imports above)
-
-        # dask's own forkserver preload list would import pandas and the like into the driver
-        if hasattr(distributed.utils, "_forkserver_preload_set"):
-            distributed.utils._forkserver_preload_set = True
-    else:
-        warmer = threading.Thread(target=warm, name="demseis-warm-numba")
-        warmer.start()
-    cluster = client = None
-    try:
-        with dask.config.set({"distributed.worker.daemon": False,
-                              "distributed.worker.multiprocessing-method": method,
-                              "distributed.scheduler.allowed-failures": retries + 1,
-                              **QUIET_DASK}):
-            # No dashboard; the scheduler's small HTTP server (health routes) on any free port:
-            # the default :8787 warns when another cluster holds it. Logs: CRITICAL only; task errors reach the
-            # driver through the futures and end up in the summary, and a worker cut off by an
-            # interrupted driver must not print tracebacks.
-            cluster = LocalCluster(n_workers=0, threads_per_worker=1, processes=True,
-                                   dashboard_address=":0",  # any free port: no warning
-                                   scheduler_kwargs={"dashboard": False}, env=env,
-                                   silence_logs=logging.CRITICAL)
-            client = Client(cluster)
-            client.register_plugin(IgnoreSigint())  # workers started later (restarts) too
-            if method == "forkserver":  # forked workers inherit the server's ignored SIGINT
-                cluster.scale(n)
-            else:
-                # Spawned workers are started with SIGINT ignored, so they ignore it from their
-                # first import on; the driver ignores it only for the ~0.1 s the spawns take.
-                with sigint_ignored():
-                    cluster.scale(n)
-                    _wait_spawned(n)
-            # Tasks go out as soon as one worker is up (the others join as they start), and
-            # a worker killed while starting does not make the sweep wait for it for ever.
-            try:
-                client.wait_for_workers(1, timeout=120)
-            except TimeoutError:
-                raise InputError("no dask worker started within 120 s") from None
-        if warmer is not None:
-            warmer.join()
-        if warm_errors:
-            raise warm_errors[0]
-    except BaseException:
-        if warmer is not None:
-            warmer.join()
-        if client is not None:
-            client.close()
-        if cluster is not None:
-            cluster.close()
-        raise
-    return client, cluster
-
 
 def _progress_bar(total: int, enabled: bool, desc: str = "generate") -> Any:
     return tqdm(total=total, unit="sample", desc=desc, disable=not enabled,

@@ -128,3 +128,20 @@ def sigint_ignored() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGINT, old)
+
+
+@contextlib.contextmanager
+def sigint_deferred(raises: type[KeyboardInterrupt] = KeyboardInterrupt) -> Iterator[None]:
+    """Hold SIGINT in the main thread for the block; one that arrived is raised at its end (as
+    ``raises``: :class:`demseis.interrupts.Finished` where the block completes the work)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got: list[int] = []
+    old = signal.signal(signal.SIGINT, lambda signum, frame: got.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+    if got:
+        raise raises
