@@ -25,6 +25,7 @@ import os
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -308,11 +309,18 @@ def train(store: Any, out: str | Path = "model.pt", **kwargs: Any) -> dict[str, 
         ``save_every``, ``resume``, ``threads``, ``progress``, ``log``
         (:func:`demseis.learning.model.train_model`).
     """
-    from demseis.learning.model import train_model  # lazy: torch
-
+    train_model = _learning_model().train_model
     if isinstance(store, (list, tuple)):
         return train_model([str(getattr(s, "path", s)) for s in store], out, **kwargs)
     return train_model(str(getattr(store, "path", store)), out, **kwargs)
+
+
+def _learning_model() -> ModuleType:
+    """:mod:`demseis.learning.model`, imported at the first call: it imports torch (about 2 s,
+    and an optional extra), which generating, opening and scoring never need."""
+    from demseis.learning import model  # lazy: torch
+
+    return model
 
 
 def predict(model: Any, source: Any, out: str | Path | None = None, *,
@@ -338,8 +346,7 @@ def predict(model: Any, source: Any, out: str | Path | None = None, *,
     -------
     Path of ``out``, or the probability array when ``out`` is None.
     """
-    from demseis.learning import model as m  # lazy: torch
-
+    m = _learning_model()
     if model is None:
         model = m.pretrained_path()
     if out is not None:  # the paths are checked before the model is loaded

@@ -39,12 +39,11 @@ def _mpl() -> SimpleNamespace:
     import matplotlib  # lazy: see the module docstring
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # lazy: see the module docstring
-    from matplotlib.collections import EllipseCollection  # lazy: see the module docstring
-    from matplotlib.colors import ListedColormap  # lazy: see the module docstring
+    import matplotlib.pyplot as plt  # lazy (and with it matplotlib.collections and .colors)
 
-    return SimpleNamespace(mpl=matplotlib, plt=plt, EllipseCollection=EllipseCollection,
-                           ListedColormap=ListedColormap)
+    return SimpleNamespace(mpl=matplotlib, plt=plt,
+                           EllipseCollection=matplotlib.collections.EllipseCollection,
+                           ListedColormap=matplotlib.colors.ListedColormap)
 
 
 def noise_title(snr_db: float, kind: str) -> str:

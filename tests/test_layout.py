@@ -353,10 +353,13 @@ LAZY_LIBRARIES = ("torch", "matplotlib", "xarray", "zarr", "dask", "distributed"
 #: NumPy), the CLI (``demseis --help`` loads no command), and two modules that stand for a
 #: heavy library (the dask worker plugin, the Numba kernels of the semblance baseline)
 LAZY_PACKAGE = {
-    "__init__.py": None, "api.py": None, "cli": None,
-    "generator/sweep/driver.py": {"demseis.generator.sweep._worker"},
+    "__init__.py": None, "api.py": None, "cli/__init__.py": {"demseis.cli"},
+    "generator/sweep/driver.py": {"demseis.generator.sweep.cluster"},
     "evaluation/baseline.py": {"demseis.evaluation._kernels"},
 }
+#: the most function-local imports the package may hold (each a heavy or optional library, or
+#: one of the lazy package modules above)
+MAX_FUNCTION_IMPORTS = 20
 
 
 def _function_imports(path: Path) -> list[tuple[str, int]]:
@@ -385,9 +388,19 @@ def test_functions_import_only_heavy_libraries():
     assert not bad, "move these imports to the top of their module:\n" + "\n".join(bad)
 
 
+def test_few_function_local_imports():
+    found = [f"demseis/{path.relative_to(PKG)}:{line} {module}" for path in _module_files()
+             for module, line in _function_imports(path)]
+    assert len(found) <= MAX_FUNCTION_IMPORTS, (
+        f"{len(found)} imports inside functions (at most {MAX_FUNCTION_IMPORTS}): import at the "
+        "top of the module, or once in a function that stands for the library:\n"
+        + "\n".join(found))
+
+
 def test_lazy_import_rule_is_not_vacuous():
     assert _lazy_allowed(Path("plotting.py"), "matplotlib.pyplot")
-    assert _lazy_allowed(Path("cli/store.py"), "demseis.datasets.read")
+    assert _lazy_allowed(Path("cli/__init__.py"), "demseis.cli")
+    assert not _lazy_allowed(Path("cli/store.py"), "demseis.datasets.read")
     assert not _lazy_allowed(Path("generator/sweep/driver.py"), "demseis.datasets")
     assert not _lazy_allowed(Path("labels/maps.py"), "demseis.labels.traces")
     assert not _lazy_allowed(Path("datasets/read.py"), "json")

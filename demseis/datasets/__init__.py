@@ -14,34 +14,18 @@ The sample arrays a store may hold are declared in :mod:`demseis.schema`. Module
 ``docs/store.md``. Importing this package imports neither torch, xarray nor zarr.
 """
 
-from demseis.datasets.dataset import (
-    FaultSegDataset,
-    Sample,
-    ShardAwareSampler,
-    read_sample,
-    split_of_shards,
-)
-from demseis.datasets.integrity import damaged_shards, shard_damage
-from demseis.datasets.lock import StoreLock, writer_lock
 from demseis.datasets.create import ParamSpec, create_store
-from demseis.datasets.layout import (
-    SCHEMA_VERSION,
-    StoreLayout,
-    open_store,
-    read_layout,
-    read_store_attrs,
-    store_layout,
-    stored_config,
-)
+from demseis.datasets.dataset import (FaultSegDataset, Sample, ShardAwareSampler, read_sample,
+                                      split_of_shards)
+from demseis.datasets.integrity import damaged_shards, shard_damage
+from demseis.datasets.layout import (SCHEMA_VERSION, StoreLayout, open_store, read_layout,
+                                     read_store_attrs, store_layout, stored_config)
+from demseis.datasets.lock import StoreLock, writer_lock
 from demseis.datasets.migrate import MigrateReport, migrate_store
 from demseis.datasets.particles import read_particles, write_particles
 from demseis.datasets.read import read_params
-from demseis.datasets.status import (
-    finalize_store,
-    record_failures,
-    remove_partial_writes,
-    shard_status,
-)
+from demseis.datasets.status import (finalize_store, record_failures, remove_partial_writes,
+                                     shard_status)
 from demseis.datasets.table import DoneParams, FullParams, read_done_params
 from demseis.datasets.validate import ValidationReport, validate_store
 from demseis.datasets.write import write_shard

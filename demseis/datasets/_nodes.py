@@ -11,13 +11,21 @@ from __future__ import annotations
 import asyncio
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from demseis.datasets._shardio import put_file
 from demseis.schema import SampleArray
 
-# zarr is imported inside the functions that use it: it takes ~0.3 s to import, and
-# ``import demseis.datasets`` (and a shard write without particles) needs none of it.
+
+def zarr_lib() -> ModuleType:
+    """The zarr package (its ``codecs``, ``storage`` and ``core.sync`` come with it), imported
+    at the first call. The one place demseis imports zarr: it takes about 0.3 s, and ``import
+    demseis.datasets``, a shard write without particles and the readers of the Dataset need
+    none of it (they read chunk files directly)."""
+    import zarr
+
+    return zarr
 
 
 def sample_compressors(spec: SampleArray) -> tuple:
@@ -27,34 +35,30 @@ def sample_compressors(spec: SampleArray) -> tuple:
     band-limited float sections compress to only ~80-90 % with lz4/zstd, and decoding costs
     more than the read (measured: 0.47 ms vs 0.90 ms per 320x512 sample).
     """
-    from zarr.codecs import BloscCodec, Crc32cCodec
-
+    codecs = zarr_lib().codecs
     if not spec.compressed:
-        return (Crc32cCodec(),)
+        return (codecs.Crc32cCodec(),)
     # lz4 decodes at GB/s; labels compress ~200-fold (measured 0.005 of raw for fault masks,
     # 0.02 ms decode per 320x512 sample; bit-shuffle was 5x slower to decode for no gain).
     shuffle = "shuffle" if spec.np_dtype.itemsize > 1 else "noshuffle"
-    return (BloscCodec(cname="lz4", clevel=5, shuffle=shuffle), Crc32cCodec())
+    return (codecs.BloscCodec(cname="lz4", clevel=5, shuffle=shuffle), codecs.Crc32cCodec())
 
 
 def flag_compressors() -> tuple:
     """Codecs of a done flag (one byte): crc32c only, so the flags are read without zarr."""
-    from zarr.codecs import Crc32cCodec
-
-    return (Crc32cCodec(),)
+    return (zarr_lib().codecs.Crc32cCodec(),)
 
 
 def small_compressors() -> tuple:
     """Codecs of the small arrays (parameters, flags, particles, coordinates): zstd, crc32c."""
-    from zarr.codecs import Crc32cCodec, ZstdCodec
-
-    return (ZstdCodec(level=0, checksum=False), Crc32cCodec())
+    codecs = zarr_lib().codecs
+    return (codecs.ZstdCodec(level=0, checksum=False), codecs.Crc32cCodec())
 
 
 def zarr_files(build: Callable[[Any], None]) -> dict[str, bytes]:
     """The files (key -> bytes) zarr writes when ``build(store)`` creates groups and arrays in
     the zarr store ``store``, an in-memory one (written to disk by :func:`put_files`)."""
-    from zarr.storage import MemoryStore
+    MemoryStore = zarr_lib().storage.MemoryStore
 
     files: dict[str, Any] = {}
     build(MemoryStore(files))
@@ -73,10 +77,8 @@ def create_arrays(store: Any, specs: Mapping[str, Mapping[str, Any]]) -> None:
     """Create the arrays ``path -> create_array keywords`` in the zarr store ``store``, all at
     once on zarr's event loop (one at a time, the ~90 metadata writes took 0.4 s of every
     store's creation)."""
-    import zarr
-    from zarr.core.sync import sync
-
-    sync(_gather_all(zarr.api.asynchronous.create_array(store, name=name, zarr_format=3, **kw)
+    zarr = zarr_lib()
+    zarr.core.sync.sync(_gather_all(zarr.api.asynchronous.create_array(store, name=name, zarr_format=3, **kw)
                      for name, kw in specs.items()))
 
 

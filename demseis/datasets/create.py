@@ -18,23 +18,11 @@ from typing import Any
 import numpy as np
 
 from demseis import __version__
-from demseis.datasets._nodes import (
-    create_arrays,
-    flag_compressors,
-    put_files,
-    sample_compressors,
-    small_compressors,
-    zarr_files,
-)
+from demseis.datasets._nodes import (create_arrays, flag_compressors, put_files,
+                                     sample_compressors, small_compressors, zarr_files, zarr_lib)
 from demseis.datasets.index import index_block
-from demseis.datasets.layout import (
-    SCHEMA_VERSION,
-    StoreLayout,
-    is_demseis_store,
-    open_store,
-    root_metadata_lost,
-    store_layout,
-)
+from demseis.datasets.layout import (SCHEMA_VERSION, StoreLayout, is_demseis_store, open_store,
+                                     root_metadata_lost, store_layout)
 from demseis.datasets.records import ParamColumn, fill_value_for, record_dtype, table_attributes
 from demseis.errors import InputError, StoreError
 from demseis.schema import SAMPLE_ARRAYS, sample_array, stored_arrays
@@ -301,7 +289,7 @@ def _store_files(wanted: StoreLayout, param_specs: Mapping[str, ParamSpec],
                  attrs: Mapping[str, Any]) -> dict[str, bytes]:
     """Every file :func:`create_store` writes for the layout ``wanted`` (key -> bytes): the
     metadata of the root, the groups and the arrays, and the coordinate arrays' chunks."""
-    import zarr
+    zarr = zarr_lib()
 
     root_attrs = {
         "demseis": {"schema_version": SCHEMA_VERSION, "package_version": __version__},

@@ -17,10 +17,10 @@ import numpy as np
 from numcodecs import blosc
 
 from demseis.datasets._shardio import RawShardReader, raw_shard_layout
+from demseis.datasets.checked import CheckedArray, read_error_text
 from demseis.datasets.layout import open_store, store_layout
 from demseis.datasets.records import fill_value_for
 from demseis.datasets.status import shard_status
-from demseis.datasets.checked import CheckedArray, read_error_text
 from demseis.datasets.table import FullParams, read_done_params, shard_params
 from demseis.errors import InputError, StoreError, import_torch
 

@@ -19,8 +19,8 @@ import numpy as np
 
 from demseis.datasets._shardio import CRC_NBYTES, check_chunk_file, check_shard_file, crc_ok
 from demseis.datasets.layout import array_metas, open_store, store_layout
-from demseis.datasets.records import read_table_chunk, unpack
 from demseis.datasets.particles import PARTICLE_FIELDS, particle_group_name
+from demseis.datasets.records import read_table_chunk, unpack
 from demseis.errors import StoreError
 
 

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from demseis import __version__
+from demseis.datasets._nodes import zarr_lib
 from demseis.datasets._shardio import ArrayMeta, array_meta
 from demseis.datasets.records import ParamColumn, columns_from_attributes
 from demseis.errors import InputError, StoreError
@@ -190,7 +191,7 @@ def _array_members(group) -> dict:
     """Every array of the store's root and of ``params``, path -> ``zarr.Array`` (e.g.
     ``"seismic"``, ``"params/dip_deg"``), their metadata read at once (two ``members()`` calls;
     one ``group[name]`` at a time, the ~90 reads took 0.1-0.2 s)."""
-    import zarr
+    zarr = zarr_lib()
 
     try:
         with warnings.catch_warnings():  # an array directory without zarr.json: named below
@@ -399,7 +400,7 @@ def open_store(path: str | Path, mode: str = "r"):
         The path is missing, is not a Zarr v3 group, was not written by demseis, or has
         another schema version; the message says which.
     """
-    import zarr
+    zarr = zarr_lib()
 
     if mode not in ("r", "r+"):
         raise InputError(f"mode must be 'r' or 'r+', got {mode!r}")

@@ -29,13 +29,8 @@ from demseis.datasets._shardio import array_meta, put_file, write_block
 from demseis.datasets.create import _table_specs
 from demseis.datasets.index import INDEX_ARRAYS, update_index
 from demseis.datasets.integrity import read_done_flags
-from demseis.datasets.layout import (
-    MIGRATABLE_VERSIONS,
-    SCHEMA_VERSION,
-    array_metas,
-    layout_of,
-    root_metadata,
-)
+from demseis.datasets.layout import (MIGRATABLE_VERSIONS, SCHEMA_VERSION, array_metas, layout_of,
+                                     root_metadata)
 from demseis.datasets.lock import writer_lock
 from demseis.datasets.records import pack
 from demseis.datasets.status import finalize_store

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from demseis.datasets._nodes import create_arrays, put_files, small_compressors, zarr_files
+from demseis.datasets._nodes import (create_arrays, put_files, small_compressors, zarr_files,
+                                     zarr_lib)
 from demseis.datasets._shardio import array_meta, write_block
 from demseis.datasets.layout import check_store_metadata
 from demseis.errors import InputError, StoreError
@@ -53,7 +54,7 @@ def write_particles(path: str | Path, run_id: int, snapshots: Sequence[Snapshot]
     task owning that run). The per-element arrays of all snapshots are concatenated;
     ``offsets[k]:offsets[k+1]`` selects snapshot ``k``.
     """
-    import zarr
+    zarr = zarr_lib()
 
     snaps = list(snapshots)
     if not snaps:
@@ -140,7 +141,7 @@ def read_particles(path: str | Path, run_id: int) -> list[Snapshot]:
     StoreError
         The store is not readable, or it holds no particles for ``run_id``.
     """
-    import zarr
+    zarr = zarr_lib()
 
     path = Path(path)
     check_store_metadata(path)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from demseis.datasets._nodes import zarr_lib
 from demseis.datasets._shardio import PARTIAL_SUFFIX
 from demseis.datasets.index import update_index
 from demseis.datasets.integrity import damaged_shards, read_done_flags
@@ -100,7 +101,7 @@ def finalize_store(path: str | Path) -> None:
     Any later metadata write (resume, :func:`record_failures`) drops the consolidated copy;
     calling this again restores it.
     """
-    import zarr
+    zarr = zarr_lib()
 
     open_store(path, "r+")
     remove_partial_writes(path)  # of a killed dask worker, or of a killed earlier driver

@@ -27,15 +27,8 @@ from demseis.datasets._shardio import ArrayMeta
 from demseis.datasets.checked import read_error_text
 from demseis.datasets.index import indexed_rows, read_table_chunk
 from demseis.datasets.integrity import flag_files, read_done_flags
-from demseis.datasets.layout import (
-    StoreLayout,
-    array_metas,
-    check_store_metadata,
-    layout_of,
-    open_store,
-    param_columns,
-    sample_specs,
-)
+from demseis.datasets.layout import (StoreLayout, array_metas, check_store_metadata, layout_of,
+                                     open_store, param_columns, sample_specs)
 from demseis.datasets.records import ParamColumn, unpack
 from demseis.errors import StoreError
 

@@ -16,23 +16,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
 from tqdm import tqdm
 
-from demseis.datasets.index import INDEX_ARRAYS, indexed_rows, written_blocks
 from demseis.datasets._shardio import check_chunk_file
+from demseis.datasets.index import INDEX_ARRAYS, indexed_rows, written_blocks
 from demseis.datasets.integrity import read_done_flags, shard_damage
-from demseis.datasets.layout import (
-    SCHEMA_VERSION,
-    StoreLayout,
-    array_metas,
-    check_store_metadata,
-    metadata_problems,
-    open_store,
-    store_layout,
-)
-from demseis.datasets.records import fill_value_for, read_table_chunk, unpack
+from demseis.datasets.layout import (SCHEMA_VERSION, StoreLayout, array_metas,
+                                     check_store_metadata, metadata_problems, open_store,
+                                     store_layout)
 from demseis.datasets.particles import particle_group_name, read_particles
+from demseis.datasets.records import fill_value_for, read_table_chunk, unpack
 from demseis.errors import StoreError
 from demseis.schema import SampleArray
 

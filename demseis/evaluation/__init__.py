@@ -8,13 +8,9 @@ Public API (see docs/scoring.md)::
 Store reads go through :mod:`demseis.datasets.read`; this package never opens a store itself.
 """
 
-from demseis.evaluation.baseline import (
-    SemblanceBaseline,
-    baseline_fault_probability,
-    dip_fault_probability,
-    semblance_fault_probability,
-)
-from demseis.evaluation.scoring import ScoreResult, SampleCounts, count_samples, score, summarise
+from demseis.evaluation.baseline import (SemblanceBaseline, baseline_fault_probability,
+                                         dip_fault_probability, semblance_fault_probability)
+from demseis.evaluation.scoring import SampleCounts, ScoreResult, count_samples, score, summarise
 
 __all__ = [
     "SampleCounts",

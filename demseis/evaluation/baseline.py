@@ -41,6 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 from tqdm import tqdm
 
+from demseis.datasets._nodes import zarr_lib
 from demseis.datasets.read import open_sections
 from demseis.errors import InputError
 
@@ -268,9 +269,7 @@ def baseline_store(store: Any, out: str, *, method: str = "dip", array: str = "s
         dest: Any = np.lib.format.open_memmap(out + ".part.npy", mode="w+", dtype=np.float32,
                                               shape=(n, h, w))
     else:
-        import zarr  # lazy: ~0.25 s to import, and only a Zarr output needs it
-
-        dest = zarr.create_array(out + ".part", shape=(n, h, w), chunks=(1, h, w),
+        dest = zarr_lib().create_array(out + ".part", shape=(n, h, w), chunks=(1, h, w),
                                  dtype="float32", fill_value=0.0, overwrite=True)
         dest.attrs["demseis_baseline"] = {"threshold": 0.5, **settings}
     done = np.flatnonzero(valid)

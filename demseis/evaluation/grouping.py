@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from tqdm import tqdm
 
+from demseis.datasets._nodes import zarr_lib
 from demseis.errors import InputError, StoreError
 from demseis.evaluation.scoring import SampleCounts, count_samples, summarise
 from demseis.evaluation.segyfile import is_segy, read_segy_section
@@ -46,8 +47,7 @@ def load_predictions(path: str) -> Any:
         if arr.ndim == 2:
             arr = arr[None]
     else:
-        import zarr  # lazy: ~0.25 s to import, and only Zarr predictions need it
-
+        zarr = zarr_lib()
         try:
             node = zarr.open(path, mode="r")
         except Exception as exc:

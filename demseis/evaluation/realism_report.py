@@ -11,12 +11,12 @@ import numpy as np
 from demseis.datasets import open_store, read_sample, store_layout
 from demseis.datasets.read import done_samples, read_params
 from demseis.errors import InputError
-from demseis.evaluation.realism import (_section, adjacent_trace_correlation, amplitude_spectrum,
-                                        centroid_period, excess_kurtosis,
-                                        fault_instances, faults_per_100_traces, intact_mask,
-                                        label_fraction, local_dips, peak_period, throws_m,
-                                        trace_correlations, zero_crossing_rates, zero_crossings)
 from demseis.evaluation.fieldio import read_amplitudes
+from demseis.evaluation.realism import (_section, adjacent_trace_correlation, amplitude_spectrum,
+                                        centroid_period, excess_kurtosis, fault_instances,
+                                        faults_per_100_traces, intact_mask, label_fraction,
+                                        local_dips, peak_period, throws_m, trace_correlations,
+                                        zero_crossing_rates, zero_crossings)
 
 FIELD_TARGETS: dict[str, dict] = {
     "dominant_period_samples": {

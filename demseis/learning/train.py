@@ -141,7 +141,7 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     the kept model), best_step, stopped_early, val_history.
     """
     torch = import_torch("training")  # lazy: heavy (~2 s), see the module docstring
-    from torch.utils.data import DataLoader
+    data = torch.utils.data
 
     if (steps is None) == (minutes is None):
         raise InputError("train_unet: give exactly one of steps or minutes")
@@ -164,19 +164,16 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
             raise InputError(f"crop = {crop}; allowed: a multiple of 4, at most {min(h, w)}")
     gen = torch.Generator().manual_seed(seed)
     if len(parts) == 1:
-        from torch.utils.data import RandomSampler  # lazy: torch
-
         ds = parts[0]
         # what DataLoader(shuffle=True, generator=gen) draws, with the draws counted
-        draws = _StoreDraws(RandomSampler(ds, generator=gen), [len(ds)])
-        loader = DataLoader(ds, batch_size=batch, sampler=draws, generator=gen, drop_last=False)
+        draws = _StoreDraws(data.RandomSampler(ds, generator=gen), [len(ds)])
+        loader = data.DataLoader(ds, batch_size=batch, sampler=draws, generator=gen,
+                                 drop_last=False)
     else:
-        from torch.utils.data import ConcatDataset  # lazy: torch
-
-        ds = _Mixed(parts, ConcatDataset(parts))
+        ds = _Mixed(parts, data.ConcatDataset(parts))
         sizes = [len(p) for p in parts]
         draws = _StoreDraws(mix_sampler(sizes, shares, gen), sizes)
-        loader = DataLoader(ds.concat, batch_size=batch, sampler=draws, drop_last=False)
+        loader = data.DataLoader(ds.concat, batch_size=batch, sampler=draws, drop_last=False)
     use_amp = (dev.type == "cuda") if amp is None else bool(amp and dev.type == "cuda")
     scaler = torch.amp.GradScaler("cuda", enabled=use_amp)
     if resume is None:
@@ -343,13 +340,12 @@ def mix_sampler(sizes: Sequence[int], shares: Sequence[float], generator: Any) -
     falls in dataset s with probability ``shares[s]`` and is uniform within it; ``sum(sizes)``
     draws per epoch. A torch ``WeightedRandomSampler`` drawing from ``generator``."""
     torch = import_torch("training")  # lazy: heavy (~2 s), see the module docstring
-    from torch.utils.data import WeightedRandomSampler
-
     # equal shares keep the per-sample weights 1 / size of the mix before weights existed
     equal = len(set(shares)) == 1
     w = torch.cat([torch.full((n,), (1.0 if equal else float(sh)) / n)
                    for n, sh in zip(sizes, shares)])
-    return WeightedRandomSampler(w, num_samples=int(sum(sizes)), generator=generator)
+    return torch.utils.data.WeightedRandomSampler(w, num_samples=int(sum(sizes)),
+                                                  generator=generator)
 
 
 class _StoreDraws:

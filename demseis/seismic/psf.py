@@ -82,10 +82,8 @@ from demseis.errors import InputError
 from demseis.seismic import _kernels
 from demseis.seismic.forward import (_check_grids, coarse_velocity, interface_times,
                                      synthetic_sections)
-from demseis.seismic.wavelet import as_wavelets
+from demseis.seismic.wavelet import as_wavelets, scipy_fft
 
-# scipy.fft is imported inside the functions that use it: it takes ~0.2 s to import, only PSF
-# imaging needs it, and `import demseis.seismic` loads no scipy submodule
 
 DEFAULT_TAPER_DEG = 5.0
 """Width of the raised-cosine edge of the dip mask (degrees), inside the maximum angle."""
@@ -146,7 +144,7 @@ def node_weights(n_rows: int, n_windows: int) -> tuple[np.ndarray, np.ndarray]:
 def padded_shape(n_rows: int, n_cols: int, pad_rows: int, pad_cols: int) -> tuple[int, int]:
     """FFT grid of a section padded by ``pad_rows`` below and ``pad_cols`` on each side
     (sizes rounded up to fast FFT lengths)."""
-    from scipy.fft import next_fast_len  # lazy: see the note above the imports
+    (next_fast_len,) = scipy_fft("next_fast_len")
 
     return (next_fast_len(n_rows + pad_rows, real=True),
             next_fast_len(n_cols + 2 * pad_cols, real=True))
@@ -189,7 +187,7 @@ def dip_masks(shape: tuple[int, int], row_step: float, col_step_m: float,
     -------
     (K, N, M // 2 + 1) float64 weights.
     """
-    from scipy.fft import fftfreq, rfftfreq  # lazy: see the note above the imports
+    fftfreq, rfftfreq = scipy_fft("fftfreq", "rfftfreq")
 
     fz = np.abs(fftfreq(shape[0], row_step)).astype(np.float32)[:, None]
     kx = np.abs(rfftfreq(shape[1], col_step_m)).astype(np.float32)[None, :]
@@ -249,7 +247,7 @@ def dip_filter(sections: np.ndarray, plan: PsfPlan) -> np.ndarray:
     float32 array of the input's shape: ``sum_k g_k(row) (a_k ** s)`` on the padded grid,
     cropped back.
     """
-    from scipy.fft import ifft, irfft, rfft2  # lazy: see the note above the imports
+    ifft, irfft, rfft2 = scipy_fft("ifft", "irfft", "rfft2")
 
     s = np.asarray(sections)
     n_rows, n_cols = s.shape[-2:]

@@ -11,6 +11,15 @@ import numpy as np
 
 from demseis.errors import InputError
 
+
+def scipy_fft(*names: str) -> tuple:
+    """The functions ``names`` of ``scipy.fft``, imported at the first call: the one place
+    ``demseis.seismic`` imports it (about 0.1-0.2 s; ``import demseis.seismic`` loads no
+    scipy submodule, and only PSF imaging and the wavelet spectra need it)."""
+    import scipy.fft
+
+    return tuple(getattr(scipy.fft, name) for name in names)
+
 RICKER_TAIL_A = 18.0
 """Truncation of the Ricker wavelet used by the forward model: the wavelet is zero for
 ``(pi f t)^2 > RICKER_TAIL_A``, i.e. |t| > sqrt(18)/(pi f) = 1.35/f, where
@@ -247,7 +256,7 @@ class Wavelet:
         frequencies times ``exp(i phi)``), scaled so that the zero-phase wavelet peaks at 1,
         truncated and tapered (:data:`HALF_WIDTH_PERIODS`).
         """
-        from scipy.fft import irfft, rfft, rfftfreq  # lazy: scipy.fft is ~0.1 s
+        irfft, rfft, rfftfreq = scipy_fft("irfft", "rfft", "rfftfreq")
 
         fs = _SAMPLES_PER_PERIOD * self.f_max_hz()
         half_n = int(math.ceil(self.half_width_s() * fs))
@@ -325,7 +334,7 @@ def rotate_phase(x: np.ndarray, phase_deg: float, axis: int = -1) -> np.ndarray:
     Hilbert transform ``H`` taken by FFT over the trace (circular; pad a short trace).
 
     The convention of ``bruges.filters.rotate_phase`` (tested against it)."""
-    from scipy.fft import irfft, rfft  # lazy
+    irfft, rfft = scipy_fft("irfft", "rfft")
 
     a = np.asarray(x, dtype=np.float64)
     n = a.shape[axis]
@@ -389,7 +398,7 @@ def estimate_wavelet(section: np.ndarray, dt_s: float, length_s: float = 0.128,
     -------
     :class:`EstimatedWavelet`.
     """
-    from scipy.fft import irfft, rfft, rfftfreq  # lazy
+    irfft, rfft, rfftfreq = scipy_fft("irfft", "rfft", "rfftfreq")
 
     x = np.asarray(section, dtype=np.float64)
     if x.ndim == 1:
