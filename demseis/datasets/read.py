@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from demseis.datasets.checked import CheckedArray
 from demseis.datasets.layout import open_store, store_layout
 from demseis.datasets.status import shard_status
-from demseis.datasets.table import FullParams, read_done_params
+from demseis.datasets.table import DoneParams, FullParams, read_done_params
 from demseis.errors import InputError, StoreError
 from demseis.seismic.segy import write_segy
 
@@ -178,10 +178,11 @@ def _fmt(v: object) -> str:
     return "inf" if math.isinf(f) else f"{f:g}"
 
 
-def store_summary(path: str | Path) -> list[str]:
+def store_summary(path: str | Path, table: DoneParams | None = None) -> list[str]:
     """Lines describing a store: samples, its sample arrays (with their role, units and
     description as the store declares them), parameter ranges over done
-    samples, config and failed runs (what ``demseis info`` prints)."""
+    samples, config and failed runs (what ``demseis info`` prints). ``table``: the store's
+    :func:`~demseis.datasets.table.read_done_params` (all parameters), if read already."""
     root = open_store(path)
     attrs = dict(root.attrs)
     cfg = attrs.get("config", {})
@@ -200,7 +201,7 @@ def store_summary(path: str | Path) -> list[str]:
         lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks "
                      f"{tuple(a.chunks)}  {spec.role}, {spec.units}: {spec.description}")
     lines.append("parameters (over done samples):")
-    table = read_done_params(path)
+    table = read_done_params(path) if table is None else table
     for name, vals in table.values.items():
         if vals.size == 0:
             continue

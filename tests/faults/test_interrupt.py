@@ -101,7 +101,7 @@ def test_ctrl_c_of_a_read_only_command_says_nothing_about_resuming(tmp_path, mon
 
     monkeypatch.setattr(handlers, "validate_store", interrupted)
     monkeypatch.setattr(handlers, "fault_distribution", interrupted)
-    monkeypatch.setattr("demseis.api.store_summary", interrupted)
+    monkeypatch.setattr(handlers, "store_summary", interrupted)
     from tests.datasets._helpers import make_store
 
     make_store(tmp_path / "s.zarr")

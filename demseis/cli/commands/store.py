@@ -6,15 +6,16 @@ from __future__ import annotations
 import argparse
 import sys
 
-from demseis.api import open as open_store
 from demseis.datasets.migrate import migrate_store
-from demseis.datasets.read import export_segy
+from demseis.datasets.read import export_segy, store_summary
+from demseis.datasets.table import read_done_params
 from demseis.datasets.validate import validate_store
 from demseis.generator.sweep.faultinfo import fault_distribution
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    print("\n".join([open_store(args.path).summary(), *fault_distribution(args.path)]))
+    table = read_done_params(args.path)  # once: the summary and the fault counts share it
+    print("\n".join([*store_summary(args.path, table), *fault_distribution(args.path, table)]))
     return 0
 
 

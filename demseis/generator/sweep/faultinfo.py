@@ -5,20 +5,22 @@ from __future__ import annotations
 from collections import Counter
 from pathlib import Path
 
-from demseis.datasets import read_done_params, read_store_attrs
+from demseis.datasets import DoneParams, read_done_params, read_store_attrs
 from demseis.generator.config.layout import param_codes
 
 #: fault records ``fault<k>_*`` looked for (a store holds as many as its config allows)
 _MAX_FAULTS = 64
 
 
-def fault_distribution(path: str | Path) -> list[str]:
+def fault_distribution(path: str | Path, table: DoneParams | None = None) -> list[str]:
     """Lines counting the runs of a store by structure, by number of basement faults, and the
     faults by kind (one count per run: the samples with ``sample_in_run == 0`` of done
-    runs). Empty if the store has no fault-system parameters (written before they existed)."""
-    # done shards only (no cost per pending run); names the store lacks are skipped
-    table = read_done_params(path, ["structure", "n_basement_faults", "sample_in_run",
-                                    *(f"fault{k}_kind" for k in range(_MAX_FAULTS))])
+    runs). Empty if the store has no fault-system parameters (written before they existed).
+    ``table``: the store's :func:`~demseis.datasets.read_done_params` (all parameters), if
+    read already."""
+    if table is None:  # done shards only (no cost per pending run); names it lacks are skipped
+        table = read_done_params(path, ["structure", "n_basement_faults", "sample_in_run",
+                                        *(f"fault{k}_kind" for k in range(_MAX_FAULTS))])
     params = table.values
     if not {"structure", "n_basement_faults", "sample_in_run"} <= set(params):
         return []
