@@ -86,17 +86,20 @@ def _plot(lines: list[dict], png: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    x = [r["done_runs"] for r in lines]
-    panels = [("files_per_run", "files per run"), ("s_per_run", "sweep s per run (2 workers)"),
+    engines = sorted({r["engine"] for r in lines})
+    panels = [("files_per_run", "files per run"), ("s_per_run", "sweep wall s per run"),
               ("info_s", "demseis info, s"), ("open_dataset_s", "FaultSegDataset(path), s"),
               ("samples_per_s", "DataLoader samples/s")]
     fig, axes = plt.subplots(1, len(panels), figsize=(3.2 * len(panels), 2.8))
     for ax, (key, label) in zip(axes, panels):
-        ax.plot(x, [r[key] for r in lines], "o-")
+        for engine in engines:
+            rows = [r for r in lines if r["engine"] == engine]
+            ax.plot([r["done_runs"] for r in rows], [r[key] for r in rows], "o-", label=engine)
         ax.set_xscale("log")
         ax.set_xlabel("runs done")
         ax.set_title(label, fontsize=9)
         ax.set_ylim(bottom=0)
+    axes[0].legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(png, dpi=110)
 
@@ -116,8 +119,9 @@ def main() -> None:
     if args.plot:
         if not args.plot_from:
             ap.error("--plot needs --plot-from LINES.jsonl")
-        rows = [json.loads(s) for s in Path(args.plot_from).read_text().splitlines() if s.strip()]
-        _plot([r for r in rows if "done_runs" in r], args.plot)
+        rows = [json.loads(s) for s in Path(args.plot_from).read_text().splitlines()
+                if s.startswith("{")]
+        _plot([r for r in rows if "sweep_s" in r], args.plot)
         return
     if not args.out:
         ap.error("--out is required")
@@ -128,7 +132,7 @@ def main() -> None:
     checkpoints = [c for c in checkpoints if c > _done_runs(path)]
     cmd = [sys.executable, "-m", "demseis", "generate", "--preset", args.preset, str(cfg),
            "--out", str(path), "--workers", str(args.workers), "--quiet"]
-    proc = subprocess.Popen(cmd, start_new_session=True)
+    proc = subprocess.Popen(cmd, start_new_session=True, stdout=sys.stderr)  # stdout: JSON only
     swept = 0.0
     t0 = time.perf_counter()
     last = (_done_runs(path), 0.0)
