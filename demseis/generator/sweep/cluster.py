@@ -109,6 +109,11 @@ def run_distributed(task: Callable[[int], dict[str, Any]], order: Sequence[int],
                 time.sleep(0.1)
                 continue
             for fut in batch:
+                if fut.status in ("lost", "pending"):
+                    # its worker died holding the result after it finished (the shard is
+                    # written): the scheduler computes it again; wait for it again
+                    running.add(fut)
+                    continue
                 if fut.status == "finished":
                     on_result(fut.result())
                 else:
