@@ -384,8 +384,8 @@ def _run_sweep(
     out = Path(out)
     t0 = time.perf_counter()
     cluster = None
-    if workers != 0 or scheduler is not None:
-        import demseis.generator.sweep.cluster as cluster  # dask: a sweep with workers only
+    if workers != 0 or scheduler is not None:  # else every run in this process, no dask
+        import demseis.generator.sweep.cluster as cluster
     remote = cluster.connect(scheduler) if scheduler is not None else None  # before writing
     existed = out.exists()
     try:
@@ -406,7 +406,7 @@ def _run_sweep(
     bar = _progress_bar(len(pending) * cfg.samples_per_run, progress and bool(pending))
     try:
         if pending:
-            if workers == 0 and scheduler is None:
+            if cluster is None:
                 t_compute = time.perf_counter()
                 for shard in pending:
                     interrupts.raise_if_interrupted()  # one swallowed where it landed
