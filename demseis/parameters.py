@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from demseis.errors import ConfigError, DemseisError, InputError
-from demseis.registry import ENGINES, IMAGING, RENDERINGS, Registry
+from demseis.registry import ENGINES, FAULT_STYLES, IMAGING, LABEL_METHODS, RENDERINGS, Registry
 
 INF = math.inf
 LEVELS = ("sweep", "run", "sample")
@@ -53,11 +53,14 @@ class Param:
         A stored ``str`` parameter holds the index of its value among the choices.
     doc : one line for ``demseis params`` and the docs.
     unit : SI unit ("" for dimensionless).
-    section : the config table that holds it (``sweep``, ``model``, ``grid``, ``output``).
+    section : the config table that holds it (``sweep``, ``model``, ``grid``, ``output``,
+        ``labels``).
     lo_open, hi_open : the bound itself is excluded.
     stage_lo, stage_hi, stage_lo_open, stage_hi_open : the wider physical domain the consuming
         stage accepts when it is called directly (analytic tests, derived per-layer materials);
         None = the config range above. A config is held to ``lo``..``hi``.
+    optional : None is a value too (the key unset: its consumer picks a value, e.g. ``[labels]
+        min_slip_m``, one grid cell); a TOML config cannot write it, a stored config can.
     """
 
     name: str
@@ -76,6 +79,7 @@ class Param:
     stage_hi: float | None = None
     stage_lo_open: bool = False
     stage_hi_open: bool = False
+    optional: bool = False
 
     def stage(self) -> Param:
         """This parameter with the bounds its consuming stage accepts (itself if no wider ones)."""
@@ -88,6 +92,8 @@ class Param:
 
     def allowed(self) -> str:
         """Human description of the admissible values, e.g. ``a number in [10, 80]``."""
+        if self.optional:
+            return dataclasses.replace(self, optional=False).allowed() + " (or unset)"
         if self.choices is not None:
             return "one of " + ", ".join(repr(c) for c in self.choices)
         if self.kind is bool:
@@ -125,6 +131,8 @@ class Param:
 
         Integers are accepted for floats, ``"inf"`` for a float whose range admits inf.
         """
+        if value is None and self.optional:
+            return None
         try:
             coerced, ok = self._coerce(value)
         except InputError as exc:  # a "module:attribute" choice that does not import
@@ -171,11 +179,21 @@ def _fmt(x: float) -> str:
 def _p(name: str, kind: type, level: str, default: Any, lo: float | None = None,
        hi: float | None = None, *, unit: str = "", doc: str = "", section: str = "sweep",
        choices: tuple[str, ...] | Registry | None = None, lo_open: bool = False,
-       hi_open: bool = False, stage: tuple[float, float, bool, bool] | None = None) -> Param:
+       hi_open: bool = False, stage: tuple[float, float, bool, bool] | None = None,
+       optional: bool = False) -> Param:
     """A declaration; ``stage`` = (lo, hi, lo_open, hi_open) of the wider stage domain."""
     st = stage if stage is not None else (None, None, False, False)
     return Param(name, kind, level, default, lo, hi, choices, doc, unit, section, lo_open, hi_open,
-                 *st)
+                 *st, optional)
+
+
+def _label(name: str, kind: type, default: Any, lo: float | None = None, hi: float | None = None,
+           *, doc: str, unit: str = "", choices: tuple[str, ...] | Registry | None = None,
+           lo_open: bool = False, optional: bool = False) -> Param:
+    """A ``[labels]`` key: one value for the whole sweep, the field of the same name of
+    :class:`demseis.labels.LabelConfig`."""
+    return _p(name, kind, "sweep", default, lo, hi, unit=unit, doc=doc, section="labels",
+              choices=choices, lo_open=lo_open, optional=optional)
 
 
 _DECLARED: tuple[Param, ...] = (
@@ -432,6 +450,99 @@ _DECLARED: tuple[Param, ...] = (
     _p("strata_dz_m", float, "sweep", 1.0, 0.05, 1.0, unit="m", section="output",
        doc="strata rendering: vertical step of the stratigraphy lookup, at most (the grid cell "
            "is split into an odd number of steps no larger)"),
+    # ---- [labels]: how the strain and displacement of the elements become labels -----------
+    # (demseis.labels.LabelConfig; strains are the dimensionless maximum shear strain gamma_max,
+    # lengths in cells are cells of the grid the labels are drawn on; docs/labels.md)
+    _label("strain_measure", str, "cumulative", choices=("total", "cumulative"),
+           doc="total (finite strain against the element's first appearance) or cumulative (sum "
+               "of the incremental gamma_max between snapshots: keeps strain later deformation "
+               "undid); which one drives the masks"),
+    _label("neighbour_method", str, "radius", choices=("radius", "knn"),
+           doc="neighbours of an element in the reference state: within neighbour_radius_factor "
+               "(r_i + r_j), or the neighbour_k nearest centres"),
+    _label("neighbour_radius_factor", float, 1.5, 0.5, 5.0, lo_open=True,
+           doc="radius method: multiple of the summed radii (1 catches touching disks only)"),
+    _label("neighbour_k", int, 10, 3, 64, doc="knn method: number of neighbours"),
+    _label("min_neighbours", int, 3, 2, 64,
+           doc="elements with fewer neighbours are invalid (strain NaN); at most neighbour_k "
+               "for knn"),
+    _label("fault_threshold", float, 0.5, 0.0, 100.0, lo_open=True,
+           doc="strain_band method: gamma_max at or above which a cell is fault"),
+    _label("damage_threshold", float, 0.3, 0.0, 100.0, lo_open=True,
+           doc="strain_band method: gamma_max at or above which a cell is damage zone (at most "
+               "fault_threshold)"),
+    _label("min_component_cells", int, 30, 0, 1_000_000, unit="cells",
+           doc="strain_band method: smaller 8-connected fault and damage components are dropped"),
+    _label("smooth_sigma_cells", float, 1.0, 0.0, 20.0, unit="cells",
+           doc="strain_band method: Gaussian sigma of the strain before thresholding (0 = none)"),
+    _label("thickness_cells", float, 1.0, 0.0, 50.0, unit="cells",
+           doc="0 keeps the thresholded band; t >= 1 thins the mask to its centre line and grows "
+               "it to a band of about t cells"),
+    _label("centreline_window_cells", int, 15, 1, 201, unit="cells",
+           doc="the centre line's branches are moving-averaged over this many cells and side "
+               "branches up to this long pruned (1 = raw skeleton); both methods"),
+    _label("method", str, "slip_trace", choices=LABEL_METHODS,
+           doc="slip_trace: crests of localised shear kept where the displacement jumps across "
+               "them (instance ids, slip, dip, sense); strain_band: the thresholded strain "
+               "band's centre line (the labels of demseis <= 0.1)"),
+    _label("min_slip_m", float, None, 0.0, 1.0e4, lo_open=True, unit="m", optional=True,
+           doc="slip_trace: smallest displacement jump across a crest cell for it to be fault; "
+               "unset = one grid cell"),
+    _label("ridge_threshold", float, 0.15, 0.0, 100.0, lo_open=True,
+           doc="slip_trace: smallest shear strain of a crest cell (of the smoothed displacement "
+               "on the grid)"),
+    _label("ridge_sigma_cells", float, 2.0, 0.0, 20.0, unit="cells",
+           doc="slip_trace: Gaussian sigma of the displacement smoothing before its shear"),
+    _label("strand_sigma_cells", float, 0.7, 0.0, 20.0, unit="cells",
+           doc="slip_trace: sigma of a finer crest search for the other slip surfaces of a wide "
+               "shear zone (strands: more than 2 cells from a trace, jump >= min_slip_m); 0 = "
+               "none"),
+    _label("slip_offset_cells", int, 3, 2, 20, unit="cells",
+           doc="slip_trace: the jump is the largest u(+k) - u(-k) along the normal for k = 2 to "
+               "this"),
+    _label("min_trace_cells", int, 15, 1, 1_000_000, unit="cells",
+           doc="slip_trace: shorter crest and trace pieces are dropped"),
+    _label("link_angle_deg", float, 35.0, 0.0, 90.0, unit="deg",
+           doc="slip_trace: branches meeting at a junction within this angle of a straight line "
+               "are one fault"),
+    _label("link_gap_cells", int, 0, 0, 50, unit="cells",
+           doc="slip_trace: crest gaps up to about this many cells are bridged before thinning"),
+    _label("min_dip_deg", float, 15.0, 0.0, 90.0, unit="deg",
+           doc="slip_trace: crest cells dipping less (direction fitted over 9 x 9 cells) are not "
+               "fault (bedding-parallel slip); 0 keeps every dip"),
+    _label("core_halfwidth_cells", int, 5, 0, 10, unit="cells",
+           doc="slip_trace: the fault core (damage class 2) is the fault mask and the shear "
+               "band's width at half maximum around each trace, up to this many cells either "
+               "side; 0 = the fault mask alone"),
+    _label("damage_width_ratio", float, 1.0, 0.0, 100.0,
+           doc="slip_trace: damage-zone total width as a multiple of the local slip"),
+    _label("damage_max_width_m", float, 200.0, 0.0, 1.0e5, unit="m",
+           doc="slip_trace: largest damage-zone total width"),
+    _label("fault_style", str, "picks", choices=FAULT_STYLES,
+           doc="the stored fault target: picks (one smooth one-pixel line per fault on the "
+               "output grid where its throw is at least min_throw_samples, as an interpreter "
+               "picks) or traces (the method's traces on the output grid, grown to "
+               "thickness_cells)"),
+    _label("min_throw_samples", float, 1.0, 0.0, 100.0, unit="samples",
+           doc="picks: smallest throw, in output samples, where a fault is drawn"),
+    _label("pick_smooth_px", float, 2.0, 0.0, 20.0, unit="px",
+           doc="picks: Gaussian sigma of the line along the fault"),
+    _label("pick_max_gap_px", int, 4, 0, 100, unit="px",
+           doc="picks: gaps of a fault's pixels up to this long are bridged"),
+    _label("pick_min_length_px", int, 5, 1, 10_000, unit="px",
+           doc="picks: shorter pieces of a line are dropped"),
+    _label("throw_from", str, "slip", choices=("slip", "offset"),
+           doc="picks: a pixel's throw is the slip's (slip sin(dip) at the output sampling) or "
+               "the reflectors' offset across it on the reference map (needs [output] "
+               "rendering = strata)"),
+    _label("offset_window_traces", int, 3, 1, 9, unit="traces",
+           doc="picks with throw_from = offset: the odd number of neighbouring trace pairs an "
+               "offset is measured over"),
+    _label("offset_faults", bool, False,
+           doc="picks with throw_from = offset: visible offsets no fault label explains become "
+               "faults, so every offset the section shows has a label"),
+    _label("offset_min_rows", int, 10, 2, 1000, unit="rows",
+           doc="with offset_faults: the fewest output rows such a fault spans"),
 )
 
 #: every declared parameter by name
@@ -534,7 +645,9 @@ def table_rows() -> list[tuple[str, str, str, str, str, str, str]]:
     rows = []
     for p in _DECLARED:
         default = p.default
-        if isinstance(default, bool):
+        if default is None:
+            text = "unset"
+        elif isinstance(default, bool):
             text = "true" if default else "false"
         elif isinstance(default, float):
             text = _fmt(default)

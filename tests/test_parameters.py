@@ -125,6 +125,15 @@ def _grid(name, value):
     return Grid(x0_m=0.0, top_m=0.0, cell_m=value, nz=2, nx=2).cell_m
 
 
+def _labels(name, value):
+    from demseis.labels import LabelConfig
+
+    # the rules that combine keys let ``value`` stand: damage_threshold <= fault_threshold
+    others = {"damage_threshold": {"fault_threshold": 100.0},
+              "fault_threshold": {"damage_threshold": min(value, 0.3)}}
+    return getattr(LabelConfig(**{name: value, **others.get(name, {})}).validate(), name)
+
+
 #: the stage check that consumes each numeric parameter; each returns the value as the stage
 #: holds it (a field of what it built) or as its output shows it
 STAGE = {
@@ -135,6 +144,8 @@ STAGE = {
     "base_stretch": _dem_stretch,
     **{name: _property_model for name in PROPERTY_FIELDS},
     **{name: _bed_model for name in BED_FIELDS},
+    **{name: _labels for name, p in PARAMS.items()
+       if p.section == "labels" and p.kind in (int, float)},
     "freq_hz": _wavelet,
     "snr_db": _noise,
     "cell_m": _grid,

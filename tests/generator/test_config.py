@@ -163,7 +163,7 @@ def test_generate_help_names_every_preset_and_every_file_is_a_preset(capsys):
                                     "keys are engine, height_m,"),
     ({"labels": {"fault_stlye": "picks"}}, "labels.fault_stlye: unknown key; did you mean "
                                            "'fault_style'? (33 keys are allowed there: "
-                                           "docs/labels.md lists them)"),
+                                           "`demseis params` lists them)"),
     ({"swep": {}}, "swep: unknown top-level key; did you mean 'sweep'?; allowed are grid,"),
 ])
 def test_a_mistyped_key_gets_did_you_mean_not_a_list_of_every_key(raw, message):

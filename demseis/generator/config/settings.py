@@ -74,6 +74,7 @@ on a two-way-time axis of ``dt_s`` samples, long enough for the slowest possible
 _MODEL_DEFS = _section("model")
 _GRID_DEFS = _section("grid")
 _OUTPUT_DEFS = _section("output")
+_LABEL_DEFS = _section("labels")
 
 
 @dataclass(frozen=True)
@@ -190,8 +191,7 @@ def unknown_key(where: str, key: str, allowed: Any) -> ConfigError:
     if len(allowed) <= 12:
         text += "; allowed keys are " + ", ".join(allowed)
     else:
-        lists = "docs/labels.md" if where == "labels" else "`demseis params`"
-        text += f" ({len(allowed)} keys are allowed there: {lists} lists them)"
+        text += f" ({len(allowed)} keys are allowed there: `demseis params` lists them)"
     return ConfigError(text)
 
 
@@ -209,23 +209,6 @@ def _parse_table(raw: Any, defs: dict[str, Param], where: str) -> dict[str, Any]
             )
         out[key] = defs[key].check_value(value, f"{where}.{key}")
     return out
-
-
-def _dataclass_table(cls: type, raw: Any, where: str) -> Any:
-    """Build a helper-owned frozen dataclass (LabelConfig) from a TOML table, then validate."""
-    if not isinstance(raw, dict):
-        raise ConfigError(f"[{where}] must be a table, got {type(raw).__name__}")
-    fields = {f.name: f for f in dataclasses.fields(cls)}
-    defaults = cls()
-    kwargs = {}
-    for key, value in raw.items():
-        if key not in fields:
-            raise unknown_key(where, key, fields)
-        default = getattr(defaults, key)
-        kwargs[key] = _coerce_like(default, value, f"{where}.{key}")
-    obj = cls(**kwargs)
-    obj.validate()
-    return obj
 
 
 def _coerce_like(default: Any, value: Any, where: str) -> Any:
@@ -314,7 +297,7 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
         )
     grid = GridSection(**_parse_table(raw.get("grid", {}), _GRID_DEFS, "grid"))
     output, sampling = _parse_output(raw.get("output", {}))
-    labels = _dataclass_table(LabelConfig, raw.get("labels", {}), "labels")
+    labels = LabelConfig(**_parse_table(raw.get("labels", {}), _LABEL_DEFS, "labels")).validate()
 
     # non-scalar PropertyModel fields live in [properties]
     prop_raw = raw.get("properties", {})
