@@ -247,6 +247,7 @@ def test_same_seed_same_bytes():
 
 
 def test_bad_input_is_refused():
+    from demseis.generator.config.sampling import RunParams
     from demseis.generator.config.settings import parse_config
     from demseis.generator.engines.runsetup import fault_system_of
 
@@ -269,8 +270,7 @@ def test_bad_input_is_refused():
         parse_config({"sweep": {"base_stretch": 0.4}})
     cfg = parse_config({"sweep": {"structure": "none", "base_stretch": 0.1}})
     with pytest.raises(ConfigError, match=r"structure.*base_stretch"):
-        fault_system_of(cfg, {"structure": "none", "fault_kind": "normal", "base_stretch": 0.0},
-                        0)
+        fault_system_of(cfg, RunParams.of({"structure": "none", "base_stretch": 0.0}), 0)
 
 
 def test_kinematic_engine_runs_structure_none():

@@ -14,15 +14,19 @@ from demseis.errors import ConfigError
 from demseis.generator.config.layout import grid_of
 from demseis.generator.engines import EngineRun, State
 from demseis.generator.engines.runsetup import run_info, run_strata
+from demseis.parameters import Param
 from demseis.schema import SampleArray, engine_labels, sample_array
 from demseis.seismic import LayerProperties
 
 
 class FlatEngine:
-    """No faulting: horizontal beds of alternating rock, the same at every snapshot."""
+    """No faulting: horizontal beds of alternating rock, ``bed_cells`` cells thick (its own
+    run-level parameter), the same at every snapshot."""
 
     particles = False
     strata = True
+    parameters = (Param("bed_cells", int, "run", 5, 2, 20, unit="cells",
+                        doc="flat engine: thickness of its beds"),)
 
     def __init__(self) -> None:
         self.simulated: list[int] = []
@@ -43,18 +47,19 @@ class FlatEngine:
 
     def states(self, cfg, run: EngineRun, snapshots: Sequence[int]) -> Iterator[State]:
         grid = grid_of(cfg)
+        cells = run.spec.params.bed_cells
         rows = np.arange(grid.nz)[:, None] * np.ones((1, grid.nx))
-        bed = (rows // 5).astype(np.int16)
+        bed = (rows // cells).astype(np.int16)
         vp = np.where(bed % 2 == 0, 2500.0, 3200.0)
         rho = np.full(grid.shape, 2300.0)
-        # the strata rendering: the same beds as mechanical units (50 m each, bottom first),
-        # and rock that never moved (reference coordinates = present ones)
-        n = grid.nz // 5
-        top = grid.top_m - 5 * grid.cell_m * np.arange(n)          # unit tops, top first
+        # the strata rendering: the same beds as mechanical units (bottom first), and rock
+        # that never moved (reference coordinates = present ones)
+        n = grid.nz // cells
+        top = grid.top_m - cells * grid.cell_m * np.arange(n)      # unit tops, top first
         props = LayerProperties(lithology=np.zeros(n, np.int16),
                                 vp=np.where(np.arange(n)[::-1] % 2 == 0, 2500.0, 3200.0),
                                 rho=np.full(n, 2300.0))
-        strata = run_strata(cfg, run.spec.params, run.spec.run, top[::-1] - 5 * grid.cell_m,
+        strata = run_strata(cfg, run.spec.params, run.spec.run, top[::-1] - cells * grid.cell_m,
                             top[::-1], props)
 
         def unmoved(x_m, depth_m):

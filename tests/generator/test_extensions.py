@@ -147,10 +147,50 @@ def test_a_registered_label_array_goes_from_generate_to_the_dataset(tmp_path):
 
 
 @pytest.mark.slow
+def test_an_engine_declares_its_own_run_parameters(flat_engine):
+    """The flat engine's ``bed_cells``: a [sweep] key of its configs only, drawn per run after
+    the declared parameters (which keep their values), typed on the run's parameters, a column
+    of its store; a declaration that breaks the rules is one error naming it."""
+    import dataclasses
+
+    from demseis.generator.config.layout import param_dtypes
+    from demseis.generator.config.sampling import run_params
+    from demseis.parameters import Param
+
+    with pytest.raises(ConfigError, match="sweep.bed_cells: unknown key"):
+        parse_config({**tiny(), "sweep": {"bed_cells": 4}})             # not a DEM key
+    raw = tiny(engine="flat")
+    raw["sweep"].update(dip_deg={"dist": "uniform", "low": 20, "high": 70})
+    plain = parse_config(raw)
+    raw["sweep"]["bed_cells"] = {"dist": "uniform", "low": 2, "high": 9}
+    cfg = parse_config(raw)
+    for run in range(4):
+        p, q = run_params(plain, run), run_params(cfg, run)
+        assert q.dip_deg == p.dip_deg                           # drawn after the declared ones
+        assert (p.bed_cells, p["bed_cells"]) == (5, 5)          # the default
+        assert isinstance(q.bed_cells, int) and 2 <= q.bed_cells <= 9
+        assert dict(q)["bed_cells"] == q.bed_cells and q.replace(bed_cells=7).bed_cells == 7
+    assert len({run_params(cfg, r).bed_cells for r in range(12)}) > 1
+    assert list(param_dtypes(cfg))[-1] == "bed_cells" and param_dtypes(cfg)["bed_cells"] == "int32"
+    with pytest.raises(ConfigError, match=r"sweep.bed_cells = 30 is not allowed.*\[2, 20\]"):
+        parse_config({**raw, "sweep": {"bed_cells": 30}})
+    bad = [(dataclasses.replace(flat_engine.parameters[0], name="dip_deg"), "name of another"),
+           (dataclasses.replace(flat_engine.parameters[0], level="sample"), "run-level"),
+           (Param("flat_kind", str, "run", "a", choices=("a", "b")), "integer code"),
+           ("bed_cells", "is not a demseis.parameters.Param")]
+    for decl, message in bad:
+        class Bad(FlatEngine):
+            parameters = (decl,)
+        with ENGINES.registered("bad", Bad()):
+            with pytest.raises(ConfigError, match=f"engine 'bad' declares parameter .*{message}"):
+                parse_config(tiny(engine="bad"))
+
+
 def test_a_plugin_named_in_the_config_reaches_the_dask_workers(tmp_path):
     """issue 36: a user's module named in the config (``plugins``, and an engine given as
     ``"module:attribute"``) is imported by every dask worker (2 workers, so no run is made in
-    the driver): the runs use the toy engine and store the toy label array."""
+    the driver): the runs use the toy engine, with the run-level parameter it declares, and
+    store the toy label array."""
     import subprocess
     import sys
 
@@ -158,7 +198,7 @@ def test_a_plugin_named_in_the_config_reaches_the_dask_workers(tmp_path):
 
     cfg = tmp_path / "p.toml"
     cfg.write_text('plugins = ["tests.generator._plugin"]\n[sweep]\nn_runs = 4\n'
-                   '[model]\nengine = "tests.generator._plugin:FLAT"\n')
+                   'bed_cells = [3, 6]\n[model]\nengine = "tests.generator._plugin:FLAT"\n')
     out = tmp_path / "p.zarr"
     run = subprocess.run([sys.executable, "-m", "demseis", "generate", str(cfg), "--preset",
                           "tiny", "--out", str(out), "--workers", "2", "--quiet"], cwd=ROOT,
@@ -167,9 +207,14 @@ def test_a_plugin_named_in_the_config_reaches_the_dask_workers(tmp_path):
     root = zarr.open_group(str(out), mode="r")
     assert root["shard_done"][:].all()
     layer, parity = root["layer"][:], root["layer_parity"][:]
-    # the flat engine's beds (5 cells each) and the plug-in's label made from them
-    assert np.array_equal(layer[:, :, 0], np.broadcast_to(np.arange(layer.shape[1]) // 5,
-                                                          layer.shape[:2]))
+    # the flat engine's beds, as thick as its own parameter says (a list: cycled over the
+    # runs), which the store keeps as a column, and the plug-in's label made from them
+    from demseis.datasets import read_params
+
+    params = read_params(out)
+    assert np.array_equal(params["bed_cells"], np.where(params["run_id"] % 2 == 0, 3, 6))
+    cells = params["bed_cells"][:, None]
+    assert np.array_equal(layer[:, :, 0], np.arange(layer.shape[1])[None, :] // cells)
     np.testing.assert_array_equal(parity, ((layer >= 0) & (layer % 2 == 1)).astype(np.uint8))
     assert "layer_parity" not in SAMPLE_ARRAYS       # this process never imported the plug-in
     assert root.attrs["config"]["plugins"] == ["tests.generator._plugin"]

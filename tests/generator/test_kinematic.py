@@ -57,8 +57,8 @@ def test_hanging_wall_is_the_footwall_shifted_by_the_throw():
     wall's layer column is the footwall's shifted down by the throw (in cells)."""
     cfg = kinematic_cfg()
     spec = plan_run(cfg, 0)
-    p = {**spec.params, "throw_taper": 0.0, "fold_amplitude_m": 0.0, "throw_m": 100.0,
-         "dip_direction": "right", "fault_x_frac": 0.6, "dip_deg": 60.0}
+    p = spec.params.replace(throw_taper=0.0, fold_amplitude_m=0.0, throw_m=100.0,
+                            dip_direction="right", fault_x_frac=0.6, dip_deg=60.0)
     info = run_info(cfg, p, 0)
     layer, maps = kinematic_state(cfg, p, 0, info, 1.0)
     grid = grid_of(cfg)
@@ -82,7 +82,7 @@ def test_hanging_wall_is_the_footwall_shifted_by_the_throw():
 def test_throw_taper_kills_the_throw_at_the_tips():
     cfg = kinematic_cfg()
     spec = plan_run(cfg, 0)
-    p = {**spec.params, "throw_taper": 1.0, "fold_amplitude_m": 0.0}
+    p = spec.params.replace(throw_taper=1.0, fold_amplitude_m=0.0)
     layer, maps = kinematic_state(cfg, p, 0, run_info(cfg, p, 0), 1.0)
     slip = maps["slip_m"][maps["fault"] == 1]
     assert slip.min() < 0.5 * slip.max()

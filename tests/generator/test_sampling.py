@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from demseis.generator.config.sampling import plan_run, run_params
-from demseis.generator.config.settings import parse_config
+from demseis.generator.config.settings import load_config, parse_config
 
 
 def _cfg(**sweep):
@@ -66,3 +67,37 @@ def test_truncnormal_inversion_matches_scipy():
         ref = stats.truncnorm((low - mean) / std, (high - mean) / std, loc=mean, scale=std)
         for u in (0.001, 0.1, 0.37, 0.5, 0.9, 0.999):
             assert abs(spec.sample(FixedU(u)) - ref.ppf(u)) < 1e-9 * max(1.0, abs(mean))
+
+
+def test_run_params_are_one_typed_frozen_object_that_reads_as_a_mapping():
+    """A run's parameters: one field per run-level declaration with its declared type, the
+    same values through attributes and keys, frozen, and pickled by reference to the workers."""
+    import dataclasses
+    import pickle
+
+    from demseis.generator.config.sampling import RUN_KEYS, RunParams, RunSpec
+    from demseis.parameters import SCENARIO
+
+    cfg = load_config(preset="variety")
+    p = run_params(cfg, 3)
+    assert isinstance(p, RunParams)
+    fields = [f for f in dataclasses.fields(p) if f.name != "engine_values"]
+    assert [f.name for f in fields] == list(RUN_KEYS) == list(p) and p.engine_values == ()
+    assert set(RUN_KEYS) == {k for k, d in SCENARIO.items() if d.level == "run"}
+    for f in fields:
+        assert f.type is SCENARIO[f.name].kind
+        assert type(getattr(p, f.name)) is SCENARIO[f.name].kind, f.name
+        assert p[f.name] == getattr(p, f.name)
+    assert dict(p) == {k: getattr(p, k) for k in RUN_KEYS} and len(p) == len(RUN_KEYS)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        p.dip_deg = 10.0
+    with pytest.raises(KeyError):
+        p["freq_hz"]                       # a sample-level parameter: not a run's
+    assert pickle.loads(pickle.dumps(p)) == p
+    q = p.replace(n_layers=7.0, dip_deg=30)            # coerced to the declared kinds
+    assert (q.n_layers, type(q.n_layers), q.dip_deg, type(q.dip_deg)) == (7, int, 30.0, float)
+    assert q.throw_m == p.throw_m and p == run_params(cfg, 3)          # p itself unchanged
+    with pytest.raises(KeyError, match="freq_hz"):
+        RunParams.of({"freq_hz": 20.0})
+    spec = RunSpec(run=0, params={**p, "dip_deg": 20.0}, renders=())    # a dict is made one
+    assert isinstance(spec.params, RunParams) and spec.params.dip_deg == 20.0

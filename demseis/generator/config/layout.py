@@ -141,7 +141,7 @@ def param_dtypes(cfg: Config) -> dict[str, str]:
     if cfg.sampling:
         out.update({s.name: s.dtype for s in SAMPLING_STORED})
     codes = param_codes()
-    for key, pdef in SCENARIO.items():
+    for key, pdef in cfg.scenario.items():   # the engine's own parameters last
         if key in out:
             continue
         if key in codes:

@@ -22,6 +22,7 @@ A run's values depend only on the sweep seed and the run index, never on worker 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,7 +30,7 @@ import numpy as np
 
 from demseis.generator.config.params import DistSpec, Fixed, GridSpec
 from demseis.generator.config.settings import Config, _cross
-from demseis.parameters import SCENARIO
+from demseis.parameters import SCENARIO, Param
 from demseis.seismic.wavelet import Wavelet
 
 #: second spawn key of a run's seed tree (values fixed: changing one changes every dataset)
@@ -103,24 +104,112 @@ class Render:
                        str(v.get("wavelet_phase", "zero")))
 
 
+#: the run-level parameters, in declaration order (the fields of :class:`RunParams`)
+RUN_KEYS: tuple[str, ...] = tuple(k for k, p in SCENARIO.items() if p.level == "run")
+
+
+class _RunValues(Mapping):
+    """The methods of :class:`RunParams`: besides its typed fields (``params.dip_deg``), it
+    reads as the mapping ``name -> value`` of every run-level parameter (``params["dip_deg"]``,
+    ``{**params}``), in declaration order, then the engine's own parameters
+    (:func:`demseis.generator.config.settings.engine_parameters`), which read the same way
+    (``params.my_param``, ``params["my_param"]``)."""
+
+    engine_values: tuple[tuple[str, Any], ...]
+
+    def __getitem__(self, key: str) -> Any:
+        if key in RUN_KEYS:
+            return getattr(self, key)
+        for name, value in self.engine_values:
+            if name == key:
+                return value
+        raise KeyError(key)
+
+    def __getattr__(self, name: str) -> Any:   # only for names that are not fields
+        if name.startswith("__") or name == "engine_values":
+            raise AttributeError(name)
+        for key, value in self.engine_values:
+            if key == name:
+                return value
+        raise AttributeError(f"no run parameter {name!r}")
+
+    def __iter__(self) -> Iterator[str]:
+        yield from RUN_KEYS
+        yield from (name for name, _ in self.engine_values)
+
+    def __len__(self) -> int:
+        return len(RUN_KEYS) + len(self.engine_values)
+
+    @classmethod
+    def of(cls, values: Mapping[str, Any],
+           engine: Mapping[str, Param] | None = None) -> RunParams:
+        """The run parameters ``values``, each coerced to its declared kind (a run-level
+        parameter not given takes its declared default); ``engine``: the declarations of the
+        engine's own parameters among them (:meth:`Config.scenario`). A :class:`KeyError`
+        names a key that is neither."""
+        engine = engine or {}
+        unknown = sorted(set(values) - set(RUN_KEYS) - set(engine))
+        if unknown:
+            raise KeyError(f"not run-level parameters: {', '.join(unknown)}; declared: "
+                           f"{', '.join(RUN_KEYS)}")
+        own = tuple((k, engine[k].kind(v)) for k, v in values.items() if k in engine)
+        return cls(**{k: SCENARIO[k].kind(v) for k, v in values.items() if k in RUN_KEYS},
+                   engine_values=own)
+
+    def replace(self, **changes: Any) -> RunParams:
+        """These values with ``changes``, each coerced to the kind of the value it replaces."""
+        kinds = {k: type(v) for k, v in self.engine_values}
+        unknown = sorted(set(changes) - set(RUN_KEYS) - set(kinds))
+        if unknown:
+            raise KeyError(f"not parameters of this run: {', '.join(unknown)}")
+        merged = {**self, **changes}
+        own = tuple((k, kind(merged[k])) for k, kind in kinds.items())
+        return dataclasses.replace(self.of({k: merged[k] for k in RUN_KEYS}), engine_values=own)
+
+
+def _run_field(pdef: Param) -> tuple[str, type, Any]:
+    return pdef.name, pdef.kind, dataclasses.field(default=pdef.default)
+
+
+RunParams = dataclasses.make_dataclass(
+    "RunParams", [_run_field(SCENARIO[k]) for k in RUN_KEYS]
+    + [("engine_values", tuple, dataclasses.field(default=()))],
+    bases=(_RunValues,), frozen=True)
+RunParams.__module__ = __name__  # pickles by reference (run specs travel to the dask workers)
+RunParams.__doc__ = """The run-level parameter values of one run, built once by
+:func:`run_params`: a frozen object with one typed field per run-level parameter of
+:mod:`demseis.parameters` (``dip_deg: float``, ``structure: str``, ``n_layers: int``, ...) and
+``engine_values``, the (name, value) pairs of the engine's own parameters; it reads as a
+mapping too (see ``_RunValues``)."""
+
+
 @dataclass(frozen=True)
 class RunSpec:
-    """Everything one run (of any engine) and its renders need."""
+    """Everything one run (of any engine) and its renders need.
+
+    ``params``: the run-level values, a :class:`RunParams` (a mapping given is made one).
+    """
 
     run: int
-    params: dict[str, Any]  # run-level parameter values
+    params: RunParams
     renders: tuple[Render, ...]
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.params, RunParams):
+            object.__setattr__(self, "params", RunParams.of(self.params))
 
-def run_params(cfg: Config, run: int) -> dict[str, Any]:
+
+def run_params(cfg: Config, run: int) -> RunParams:
     """Run-level parameter values of run ``run``.
 
     Run-level grids are crossed (in key order) and cycled over the runs: run ``i`` takes
     combination ``i mod G``. Distributions are drawn from node ``(run, SEED_RUN_PARAMS)`` in
-    key order.
+    key order: the declared parameters, then the engine's own.
     """
-    run_specs = {k: s for k, s in cfg.sweep.params.items() if SCENARIO[k].level == "run"}
-    return _draw(run_specs, run, rng_at(cfg, run, SEED_RUN_PARAMS))
+    scenario = cfg.scenario
+    run_specs = {k: s for k, s in cfg.sweep.params.items() if scenario[k].level == "run"}
+    return RunParams.of(_draw(run_specs, run, rng_at(cfg, run, SEED_RUN_PARAMS)),
+                        {k: p for k, p in scenario.items() if k not in SCENARIO})
 
 
 def plan_run(cfg: Config, run: int) -> RunSpec:

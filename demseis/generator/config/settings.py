@@ -113,11 +113,18 @@ class Config:
     #: listed, or the low end).
     sampling: dict[str, Spec] = field(default_factory=dict)
 
+    @property
+    def scenario(self) -> dict[str, Param]:
+        """The declarations of ``sweep.params``: every ``run`` and ``sample`` parameter of
+        :mod:`demseis.parameters`, then the run-level parameters this config's engine declares
+        (:func:`engine_parameters`)."""
+        return {**SCENARIO, **engine_parameters(self.model.engine)}
+
     # ---- derived sizes -------------------------------------------------------------
     def render_grid(self) -> list[dict[str, Any]]:
         """The render-level combinations of one snapshot (grids crossed, in key order)."""
         return _cross({k: s for k, s in self.sweep.params.items()
-                       if SCENARIO[k].level == "sample"})
+                       if k in SCENARIO and SCENARIO[k].level == "sample"})
 
     @property
     def renders_per_run_snapshot(self) -> int:
@@ -172,6 +179,39 @@ def _cross(specs: dict[str, Spec]) -> list[dict[str, Any]]:
         else:
             combos = [{**c, key: spec} for c in combos]
     return combos
+
+
+def engine_parameters(engine: str) -> dict[str, Param]:
+    """The run-level parameters that engine ``engine`` declares besides those of
+    :mod:`demseis.parameters`: its optional ``parameters`` attribute, a sequence of
+    :class:`~demseis.parameters.Param` (level ``"run"``, section ``"sweep"``, kind ``float``,
+    ``int`` or ``bool``, a name no other parameter has). A config for that engine takes them
+    in ``[sweep]`` (fixed, a list or a distribution), every run draws them after the declared
+    ones (so those keep their values) and its store holds them as columns after the others.
+
+    Raises
+    ------
+    ConfigError
+        A declaration breaks one of those rules (naming the engine and the parameter).
+    """
+    out: dict[str, Param] = {}
+    for pdef in getattr(ENGINES.get(engine), "parameters", ()):
+        name = getattr(pdef, "name", repr(pdef))
+        problem = None
+        if not isinstance(pdef, Param):
+            problem = "is not a demseis.parameters.Param"
+        elif pdef.level != "run" or pdef.section != "sweep":
+            problem = (f"has level {pdef.level!r} and section {pdef.section!r}: an engine "
+                       "declares run-level [sweep] parameters only")
+        elif pdef.kind not in (float, int, bool):
+            problem = (f"has kind {pdef.kind.__name__}: an engine's parameters are numbers or "
+                       "booleans (give a choice as an integer code)")
+        elif pdef.name in PARAMS or pdef.name in out:
+            problem = "has the name of another parameter"
+        if problem:
+            raise ConfigError(f"engine {engine!r} declares parameter {name!r}, which {problem}")
+        out[pdef.name] = pdef
+    return out
 
 
 # ---- parsing -----------------------------------------------------------------------
@@ -271,7 +311,13 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
     if not isinstance(name, str) or not name:
         raise ConfigError(f"name = {name!r}: expected a non-empty string")
 
-    pdefs = SCENARIO
+    model = ModelSection(**_parse_table(raw.get("model", {}), _MODEL_DEFS, "model"))
+    if model.radius_min_m > model.radius_max_m:
+        raise ConfigError(
+            f"model.radius_min_m = {model.radius_min_m:g} must be <= model.radius_max_m = "
+            f"{model.radius_max_m:g}"
+        )
+    pdefs = {**SCENARIO, **engine_parameters(model.engine)}
     sweep_raw = raw.get("sweep", {})
     if not isinstance(sweep_raw, dict):
         raise ConfigError(f"[sweep] must be a table, got {type(sweep_raw).__name__}")
@@ -288,13 +334,6 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
         specs.setdefault(key, Fixed(pdef.default))
     specs = {k: specs[k] for k in pdefs}  # canonical order
     sweep = SweepSection(params=specs, **sweep_fixed)
-
-    model = ModelSection(**_parse_table(raw.get("model", {}), _MODEL_DEFS, "model"))
-    if model.radius_min_m > model.radius_max_m:
-        raise ConfigError(
-            f"model.radius_min_m = {model.radius_min_m:g} must be <= model.radius_max_m = "
-            f"{model.radius_max_m:g}"
-        )
     grid = GridSection(**_parse_table(raw.get("grid", {}), _GRID_DEFS, "grid"))
     output, sampling = _parse_output(raw.get("output", {}))
     labels = LabelConfig(**_parse_table(raw.get("labels", {}), _LABEL_DEFS, "labels")).validate()

@@ -33,7 +33,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from demseis.errors import InputError
-from demseis.generator.config.sampling import RunSpec
+from demseis.generator.config.sampling import RunParams, RunSpec
 from demseis.generator.config.settings import Config
 from demseis.generator.engines.runsetup import RunInfo, run_info
 from demseis.registry import ENGINES
@@ -105,6 +105,10 @@ class Engine(Protocol):
     packs : (optional, default False) whether its runs take their settled pack from the
         library of ``[model] pack_library`` packs; an engine without ignores the key (and a
         store's config does not record it).
+    parameters : (optional, default none) its own run-level ``[sweep]`` parameters, a tuple
+        of :class:`demseis.parameters.Param` (numbers or booleans); each run draws them after
+        the declared ones and ``spec.params`` carries them
+        (:func:`demseis.generator.config.settings.engine_parameters`).
     """
 
     particles: bool
@@ -114,7 +118,7 @@ class Engine(Protocol):
         naming the keys (rules that combine several parameters; each one's range is checked
         before)."""
 
-    def cost(self, cfg: Config, params: Mapping[str, Any]) -> float:
+    def cost(self, cfg: Config, params: RunParams) -> float:
         """Relative cost of a run with run-level ``params`` (a sweep starts the costliest
         runs first); any unit, compared only between runs of one config."""
 

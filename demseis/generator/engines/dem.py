@@ -18,10 +18,9 @@ import copy
 import dataclasses
 import math
 import os
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from functools import partial
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -33,7 +32,7 @@ from demseis.errors import ConfigError, SimulationError
 from demseis.generator.config.layout import grid_of
 from demseis.generator.config.params import DistSpec, Fixed, spec_values_hint
 from demseis.generator.config.sampling import (SEED_DEM, SEED_LAYERS, SEED_PACK, SEED_PROPERTIES,
-                                               RunSpec, rng_at)
+                                               RunParams, RunSpec, rng_at)
 from demseis.generator.config.settings import Config
 from demseis.generator.engines import EngineRun, State
 from demseis.generator.engines.physics import check_physics
@@ -102,15 +101,15 @@ class DemEngine:
         secs = n_elem * (steps / DRY_RUN_ELEMENT_STEPS_PER_S + DRY_RUN_SETTLE_S_PER_ELEMENT)
         return f"~{n_elem:,.0f} elements each", secs
 
-    def cost(self, cfg: Config, params: Mapping[str, Any]) -> float:
+    def cost(self, cfg: Config, params: RunParams) -> float:
         """Integrator steps to the target throw plus settling: path along dip (or the base's
         stretch, if longer) / wall speed / dt, with the DEM's own time step
         (:func:`demseis.dem.time_step`); the element count is the same for every run of a
         sweep."""
         m = cfg.model
-        dt = time_step(m.radius_min_m, params["density_kg_m3"], params["kn_n_m"])
-        path_m = max(params["throw_m"] / math.sin(math.radians(params["dip_deg"])),
-                     abs(float(params.get("base_stretch", 0.0))) * m.width_m)
+        dt = time_step(m.radius_min_m, params.density_kg_m3, params.kn_n_m)
+        path_m = max(params.throw_m / math.sin(math.radians(params.dip_deg)),
+                     abs(params.base_stretch) * m.width_m)
         return (path_m / m.wall_speed_m_s + 4.0) / dt
 
     def simulate(self, cfg: Config, spec: RunSpec,
@@ -125,7 +124,7 @@ class DemEngine:
         """
         p = spec.params
         material = material_of(p)
-        thick = layer_thicknesses(cfg, int(p["n_layers"]), float(p["layer_thickness_cv"]),
+        thick = layer_thicknesses(cfg, p.n_layers, p.layer_thickness_cv,
                                   rng_at(cfg, spec.run, SEED_LAYERS))
         fault = fault_system_of(cfg, p, spec.run)
         info = run_info(cfg, p, spec.run, basement=fault)
@@ -133,20 +132,20 @@ class DemEngine:
         asm = build_assembly(
             cfg.model.width_m, cfg.model.height_m,
             radius_min_m=cfg.model.radius_min_m, radius_max_m=cfg.model.radius_max_m,
-            n_layers=int(p["n_layers"]), layer_thickness_m=thick, material=material, rng=rng,
+            n_layers=p.n_layers, layer_thickness_m=thick, material=material, rng=rng,
             pack=run_pack(cfg, spec.run) if cfg.model.pack_library else None,
         )
         layers = None
-        if float(p["strength_contrast"]) > 1.0:
+        if p.strength_contrast > 1.0:
             model = property_model_of(cfg, p)
             # the same draw as states' (the first layers do not depend on the total)
-            lith = draw_layer_properties(int(p["n_layers"]), model,
+            lith = draw_layer_properties(p.n_layers, model,
                                          rng_at(cfg, spec.run, SEED_PROPERTIES)).lithology
             layers = layer_materials([model.lithologies[k] for k in lith], material,
-                                     float(p["strength_contrast"]))
+                                     p.strength_contrast)
         # uplift (reverse and listric faults, a shortening base) is eroded at the top of the
         # sample grid
-        stretch = float(p["base_stretch"])
+        stretch = p.base_stretch
         uplift = stretch < 0 or (not isinstance(fault, NormalFault) and any(
             f.kind != "normal" for f in fault.faults))
         causes = []
@@ -277,9 +276,9 @@ def dem_strata(cfg: Config, run: EngineRun, snaps: Sequence[Snapshot], props: La
     built with), then each growth layer over the reference y its elements were deposited at
     (``moves``: :func:`demseis.labels.displacement_history` of ``snaps``)."""
     p = run.spec.params
-    n = int(p["n_layers"])
+    n = p.n_layers
     H = cfg.model.height_m
-    thick = layer_thicknesses(cfg, n, float(p["layer_thickness_cv"]),
+    thick = layer_thicknesses(cfg, n, p.layer_thickness_cv,
                               rng_at(cfg, run.spec.run, SEED_LAYERS))
     thick = np.full(n, H / n) if thick is None else thick
     top = np.cumsum(thick)

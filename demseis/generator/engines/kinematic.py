@@ -41,17 +41,16 @@ There are no particles: the store's ``particles/`` group stays empty.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from functools import partial
-from typing import Any
 
 import numpy as np
 from scipy.ndimage import gaussian_filter
 
 from demseis.generator.config.layout import grid_of
 from demseis.generator.config.sampling import (SEED_DEM, SEED_LAYERS, SEED_POPULATION,
-                                               SEED_PROPERTIES, RunSpec, rng_at)
+                                               SEED_PROPERTIES, RunParams, RunSpec, rng_at)
 from demseis.generator.config.settings import Config
 from demseis.generator.engines import EngineRun, State
 from demseis.generator.engines.runsetup import RunInfo, property_model_of, run_info, run_strata
@@ -151,7 +150,7 @@ class KinematicFault:
     taper: float
 
 
-def population(cfg: Config, params: Mapping[str, Any], run: int) -> list[KinematicFault]:
+def population(cfg: Config, params: RunParams, run: int) -> list[KinematicFault]:
     """The fault population that takes up ``base_stretch`` of the width, oldest first
     (empty when ``base_stretch`` is 0).
 
@@ -167,17 +166,17 @@ def population(cfg: Config, params: Mapping[str, Any], run: int) -> list[Kinemat
     ``HALF_LENGTH_RANGE`` of the height, so small faults are short and large ones cross the
     section. Ages are in a random order.
     """
-    e = float(params["base_stretch"])
+    e = params.base_stretch
     if e == 0.0:
         return []
     W, H = cfg.model.width_m, cfg.model.height_m
     rng = rng_at(cfg, run, SEED_POPULATION)
-    n = int(params["population_faults"])
-    dips = np.clip(rng.normal(float(params["dip_deg"]), POPULATION_DIP_SD_DEG, n), 15.0, 80.0)
-    main = 1 if str(params["dip_direction"]) == "right" else -1
+    n = params.population_faults
+    dips = np.clip(rng.normal(params.dip_deg, POPULATION_DIP_SD_DEG, n), 15.0, 80.0)
+    main = 1 if params.dip_direction == "right" else -1
     dirs = np.where(rng.random(n) < SYNTHETIC_FRACTION, main, -main)
     x_mid = rng.uniform(0.0, W, n)
-    c = float(params["population_throw_exponent"])
+    c = params.population_throw_exponent
     size = np.minimum((1.0 - rng.random(n)) ** (-1.0 / c), MAX_THROW_RATIO)
     cot = 1.0 / np.tan(np.radians(dips))
     throws = size * abs(e) * W / float(np.sum(size * cot))
@@ -193,7 +192,7 @@ def population(cfg: Config, params: Mapping[str, Any], run: int) -> list[Kinemat
             for i in order]
 
 
-def kinematic_faults(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo,
+def kinematic_faults(cfg: Config, params: RunParams, run: int, info: RunInfo,
                      rng: np.random.Generator) -> list[KinematicFault]:
     """Every fault of run ``run``, oldest first: the population (:func:`population`), then the
     basement faults of ``info`` (their centres drawn from ``rng``, the run's SEED_DEM
@@ -201,7 +200,7 @@ def kinematic_faults(cfg: Config, params: Mapping[str, Any], run: int, info: Run
     H = cfg.model.height_m
     faults = info.system.faults
     centres = rng.uniform(0.35, 0.65, len(faults)) * H
-    taper = float(params["throw_taper"])
+    taper = params.throw_taper
     basement = [KinematicFault(x_m=f.x_m, dip_deg=f.dip_deg, throw_m=f.throw_m,
                                direction=1 if f.dip_direction == "right" else -1, kind=f.kind,
                                radius_m=f.radius_m if f.kind == "listric" else None,
@@ -211,7 +210,7 @@ def kinematic_faults(cfg: Config, params: Mapping[str, Any], run: int, info: Run
     return population(cfg, params, run) + basement
 
 
-def unfault(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo, fraction: float,
+def unfault(cfg: Config, params: RunParams, run: int, info: RunInfo, fraction: float,
             x_m: np.ndarray, depth_m: np.ndarray,
             maps: dict[str, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Where the rock at points ``(x_m, depth_m)`` (depth below the grid top) was before it was
@@ -228,7 +227,7 @@ def unfault(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo, fra
     rng = rng_at(cfg, run, SEED_DEM)
     faults = kinematic_faults(cfg, params, run, info, rng)
     fold_x = np.linspace(-W, 2 * W, 3 * grid.nx + 1)
-    fold = fold_field(fold_x, W, float(params["fold_amplitude_m"]), str(params["fold_kind"]), rng)
+    fold = fold_field(fold_x, W, params.fold_amplitude_m, params.fold_kind, rng)
     axis = np.linspace(-(ABOVE + 1.0) * H, (2.0 + BELOW) * H, 8 * grid.nz + 1)
     # youngest fault first: map present cells back to where their rock was before it slipped
     for k in range(len(faults) - 1, -1, -1):
@@ -267,7 +266,7 @@ def draw_fault_labels(maps: dict[str, np.ndarray], k: int, kind: str, perp: np.n
     maps["sense"][on] = 2 if kind == "reverse" else 1
 
 
-def kinematic_state(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo,
+def kinematic_state(cfg: Config, params: RunParams, run: int, info: RunInfo,
                     fraction: float) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Layer index and label maps of run ``run`` with ``fraction`` of every throw.
 
@@ -284,7 +283,7 @@ def kinematic_state(cfg: Config, params: Mapping[str, Any], run: int, info: RunI
     X, D = np.meshgrid(xc, zc)
     maps = {name: np.zeros(X.shape, sample_array(name).dtype) for name in engine_labels()}
     _, depth0 = unfault(cfg, params, run, info, fraction, X, D, maps)
-    tops = layer_tops(int(params["n_layers"]), float(params["layer_thickness_cv"]), H,
+    tops = layer_tops(params.n_layers, params.layer_thickness_cv, H,
                       rng_at(cfg, run, SEED_LAYERS))
     n_total = tops.size - 1
     # layer 0 is the deepest: count from the bottom of the stack
@@ -294,11 +293,11 @@ def kinematic_state(cfg: Config, params: Mapping[str, Any], run: int, info: RunI
     return layer, maps
 
 
-def kinematic_strata(cfg: Config, params: Mapping[str, Any], run: int,
+def kinematic_strata(cfg: Config, params: RunParams, run: int,
                      props: LayerProperties) -> Strata:
     """The beds of run ``run``: its layer stack (``layer_tops``) as the units, in y."""
     H = cfg.model.height_m
-    tops = layer_tops(int(params["n_layers"]), float(params["layer_thickness_cv"]), H,
+    tops = layer_tops(params.n_layers, params.layer_thickness_cv, H,
                       rng_at(cfg, run, SEED_LAYERS))
     y = H - tops[::-1]                                # unit boundaries in y, bottom first
     return run_strata(cfg, params, run, y[:-1], y[1:], props)
@@ -313,7 +312,7 @@ class KinematicEngine:
     def check(self, cfg: Config) -> None:
         """Nothing beyond each parameter's range: the geometry has no stability limits."""
 
-    def cost(self, cfg: Config, params: Mapping[str, Any]) -> float:
+    def cost(self, cfg: Config, params: RunParams) -> float:
         """Every run costs the same (one state per snapshot, one grid pass per fault)."""
         return 1.0
 
@@ -340,11 +339,11 @@ class KinematicEngine:
             fraction = k / (n_snap - 1)
             layer, maps = kinematic_state(cfg, p, run.spec.run, run.info, fraction)
             if props is None:
-                n_total = int(np.ceil(int(p["n_layers"]) * (1.0 + ABOVE + BELOW)))
+                n_total = int(np.ceil(p.n_layers * (1.0 + ABOVE + BELOW)))
                 props = draw_layer_properties(n_total, model,
                                               rng_at(cfg, run.spec.run, SEED_PROPERTIES))
             vp_g, rho_g = props.vp[layer], props.rho[layer]
-            sigma = float(p["gaussian_sigma_cells"])
+            sigma = p.gaussian_sigma_cells
             if sigma > 0:
                 vp_g, rho_g = gaussian_filter(vp_g, sigma), gaussian_filter(rho_g, sigma)
             values = {"step": k, "throw_m": fraction * run.info.values["throw_target_m"], "n_elements": 0,
@@ -358,7 +357,7 @@ class KinematicEngine:
                         reference=reference, strata=strata)
 
 
-def _reference(cfg: Config, params: Mapping[str, Any], run: int, info: RunInfo, fraction: float,
+def _reference(cfg: Config, params: RunParams, run: int, info: RunInfo, fraction: float,
                x_m: np.ndarray, depth_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:attr:`State.reference` of the kinematic engine: :func:`unfault`, every point in the
     pre-kinematic stack."""

@@ -62,9 +62,8 @@ bytes. There are no particles.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
@@ -73,8 +72,8 @@ from demseis.dem import FaultSystem
 from demseis.errors import ConfigError
 from demseis.generator.config.layout import grid_of, param_codes
 from demseis.generator.config.params import spec_values_hint
-from demseis.generator.config.sampling import (SEED_DEM, SEED_PROPERTIES, SEED_STRATA, RunSpec,
-                                               rng_at)
+from demseis.generator.config.sampling import (SEED_DEM, SEED_PROPERTIES, SEED_STRATA, RunParams,
+                                               RunSpec, rng_at)
 from demseis.generator.config.settings import Config
 from demseis.generator.engines import EngineRun, State
 from demseis.generator.engines.kinematic import draw_fault_labels
@@ -200,15 +199,15 @@ class PlanarModel:
         return float(throws + shear + fold)
 
 
-def planar_model(cfg: Config, params: Mapping[str, Any], run: int) -> PlanarModel:
+def planar_model(cfg: Config, params: RunParams, run: int) -> PlanarModel:
     """The geometry of run ``run`` (module docstring), from its ``SEED_DEM`` stream: the
     faults (n x [x, dip, direction, sense, throw] uniforms), then the folds and the shear."""
     W, H = cfg.model.width_m, cfg.model.height_m
     rng = rng_at(cfg, run, SEED_DEM)
-    n = int(params["planar_faults"])
+    n = params.planar_faults
     u = rng.random((n, 5))
-    dip_lo, dip_hi = float(params["planar_dip_min_deg"]), float(params["planar_dip_max_deg"])
-    t_lo, t_hi = float(params["planar_throw_min_m"]), float(params["planar_throw_max_m"])
+    dip_lo, dip_hi = params.planar_dip_min_deg, params.planar_dip_max_deg
+    t_lo, t_hi = params.planar_throw_min_m, params.planar_throw_max_m
     faults = []
     for x_u, dip_u, dir_u, sense_u, throw_u in u:
         dip = dip_lo + dip_u * (dip_hi - dip_lo)
@@ -217,13 +216,13 @@ def planar_model(cfg: Config, params: Mapping[str, Any], run: int) -> PlanarMode
         faults.append(PlanarFault(
             x_m=float(x_mid + direction * 0.5 * H / np.tan(np.radians(dip))),
             dip_deg=float(dip), throw_m=float(t_lo + throw_u * (t_hi - t_lo)),
-            direction=direction, reverse=bool(sense_u < float(params["planar_reverse_fraction"]))))
+            direction=direction, reverse=bool(sense_u < params.planar_reverse_fraction)))
     k = int(rng.integers(FOLD_BUMPS[0], FOLD_BUMPS[1] + 1))
-    amp = float(params["fold_amplitude_m"])
+    amp = params.fold_amplitude_m
     b = rng.uniform(-amp, amp, k)
     c = rng.uniform(0.0, W, k)
     d = rng.uniform(FOLD_WIDTH[0], FOLD_WIDTH[1], k) * W
-    tilt = float(params["planar_tilt_deg"])
+    tilt = params.planar_tilt_deg
     slope = float(np.tan(np.radians(rng.uniform(-tilt, tilt))))
     pivot = float(rng.uniform(0.0, W))
     return PlanarModel(width_m=W, height_m=H, faults=tuple(faults), bump_amplitude_m=b,
@@ -231,7 +230,7 @@ def planar_model(cfg: Config, params: Mapping[str, Any], run: int) -> PlanarMode
                        shear_offset_m=-slope * pivot)
 
 
-def reflectivity_strata(cfg: Config, params: Mapping[str, Any], run: int,
+def reflectivity_strata(cfg: Config, params: RunParams, run: int,
                         model: PlanarModel) -> Strata:
     """The random reflectivity series of run ``run`` as a :class:`Strata` of one unit (module
     docstring), covering the flat depths ``[-m, H + m]`` with ``m`` the model's
@@ -332,9 +331,9 @@ class PlanarEngine:
                               f"{1.5 * FOLD_BUMPS[1]:g} = {H / (1.5 * FOLD_BUMPS[1]):g} m, or "
                               "the folds overturn")
 
-    def cost(self, cfg: Config, params: Mapping[str, Any]) -> float:
+    def cost(self, cfg: Config, params: RunParams) -> float:
         """Every run costs about the same (one grid pass per fault and state)."""
-        return 1.0 + int(params["planar_faults"])
+        return 1.0 + params.planar_faults
 
     def describe(self, cfg: Config) -> tuple[str, float]:
         """A line for ``--dry-run`` and the seconds of one run on one core at most (the

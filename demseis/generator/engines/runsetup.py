@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -18,8 +17,8 @@ from demseis.dem.basement import draw_fault_system
 from demseis.dem.fault import as_system
 from demseis.errors import ConfigError
 from demseis.generator.config.layout import param_codes
-from demseis.generator.config.sampling import (SEED_FAULTS, SEED_PROPERTIES, SEED_STRATA, rng_at,
-                                               seed_sequence)
+from demseis.generator.config.sampling import (SEED_FAULTS, SEED_PROPERTIES, SEED_STRATA,
+                                               RunParams, rng_at, seed_sequence)
 from demseis.generator.config.settings import Config
 from demseis.parameters import BED_FIELDS, MATERIAL_FIELDS, MAX_BASEMENT_FAULTS, PROPERTY_FIELDS
 from demseis.seismic import (BedModel, LayerProperties, PropertyModel, Strata,
@@ -79,26 +78,26 @@ def layer_thicknesses(cfg: Config, n_layers: int, cv: float, rng: np.random.Gene
     return h
 
 
-def fault_system_of(cfg: Config, params: dict[str, Any], run: int) -> NormalFault | FaultSystem:
+def fault_system_of(cfg: Config, params: RunParams, run: int) -> NormalFault | FaultSystem:
     """The basement of a run: a :class:`NormalFault` for ``structure="single"`` and
     ``fault_kind="normal"`` (placed by ``fault_x_frac``), else a :class:`FaultSystem` (without
     faults for ``structure="none"``, which needs ``base_stretch != 0``)."""
     W = cfg.model.width_m
-    structure, kind = str(params["structure"]), str(params["fault_kind"])
+    structure, kind = params.structure, params.fault_kind
     if structure == "none":
-        if float(params.get("base_stretch", 0.0)) == 0.0:
+        if params.base_stretch == 0.0:
             raise ConfigError("structure = 'none' (no basement fault) needs base_stretch != 0: "
                               "with base_stretch = 0 nothing deforms the model")
         return FaultSystem((), speed_m_s=cfg.model.wall_speed_m_s, structure="none")
     if structure == "single" and kind == "normal":
-        return NormalFault(x_m=float(params["fault_x_frac"]) * W, dip_deg=float(params["dip_deg"]),
-                           throw_m=float(params["throw_m"]),
-                           dip_direction=str(params["dip_direction"]),
+        return NormalFault(x_m=params.fault_x_frac * W, dip_deg=params.dip_deg,
+                           throw_m=params.throw_m,
+                           dip_direction=params.dip_direction,
                            speed_m_s=cfg.model.wall_speed_m_s)
     if structure == "single":
-        f = BasementFault(float(params["fault_x_frac"]) * W, float(params["dip_deg"]),
-                          float(params["throw_m"]), str(params["dip_direction"]), kind,
-                          float(params["listric_radius_m"]))
+        f = BasementFault(params.fault_x_frac * W, params.dip_deg,
+                          params.throw_m, params.dip_direction, kind,
+                          params.listric_radius_m)
         if kind == "listric":
             f = dataclasses.replace(f, throw_m=min(f.throw_m, f.max_listric_throw_m))
         system = FaultSystem((f,), structure="single")
@@ -106,16 +105,16 @@ def fault_system_of(cfg: Config, params: dict[str, Any], run: int) -> NormalFaul
         if kind == "listric" and structure != "half_graben":
             kind = "normal"  # a listric fault must bound an end block: only half-grabens
         system = draw_fault_system(rng_at(cfg, run, SEED_FAULTS), W, structure=structure,
-                                   n_faults=int(params["n_faults"]), kind=kind,
-                                   dip_deg=float(params["dip_deg"]),
-                                   throw_m=float(params["throw_m"]),
-                                   spacing_frac=float(params["fault_spacing_frac"]),
-                                   listric_radius_m=float(params["listric_radius_m"]),
-                                   dip_direction=str(params["dip_direction"]))
+                                   n_faults=params.n_faults, kind=kind,
+                                   dip_deg=params.dip_deg,
+                                   throw_m=params.throw_m,
+                                   spacing_frac=params.fault_spacing_frac,
+                                   listric_radius_m=params.listric_radius_m,
+                                   dip_direction=params.dip_direction)
     return dataclasses.replace(system, speed_m_s=cfg.model.wall_speed_m_s)
 
 
-def run_info(cfg: Config, params: dict[str, Any], run: int,
+def run_info(cfg: Config, params: RunParams, run: int,
              basement: NormalFault | FaultSystem | None = None) -> RunInfo:
     """The basement of run ``run`` and its stored per-run values (see :class:`RunInfo`).
 
@@ -142,12 +141,12 @@ def run_info(cfg: Config, params: dict[str, Any], run: int,
     return RunInfo(system=system, values=values)
 
 
-def material_of(params: dict[str, Any]) -> Material:
+def material_of(params: RunParams) -> Material:
     """The DEM material of a run."""
     return Material(**{field: params[key] for field, key in MATERIAL_FIELDS.items()})
 
 
-def property_model_of(cfg: Config, params: dict[str, Any]) -> PropertyModel:
+def property_model_of(cfg: Config, params: RunParams) -> PropertyModel:
     """The rock-property model of a run (scalar fields from the run's parameters)."""
     scalar = {name: params[name] for name in PROPERTY_FIELDS}
     return PropertyModel(**cfg.properties, **scalar)
@@ -165,12 +164,12 @@ def run_properties(cfg: Config, run: int, model: PropertyModel,
     return layer_props, elem_seed
 
 
-def bed_model_of(params: dict[str, Any]) -> BedModel:
+def bed_model_of(params: RunParams) -> BedModel:
     """The bed model of a run (:class:`demseis.seismic.BedModel`) from its parameters."""
     return BedModel(**{name: float(params[name]) for name in BED_FIELDS})
 
 
-def run_strata(cfg: Config, params: dict[str, Any], run: int, unit_bottom_m: np.ndarray,
+def run_strata(cfg: Config, params: RunParams, run: int, unit_bottom_m: np.ndarray,
                unit_top_m: np.ndarray, props: LayerProperties,
                n_prekinematic: int | None = None) -> Strata:
     """The beds of run ``run`` (``strata`` rendering): its mechanical layers (and growth

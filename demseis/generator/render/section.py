@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 
 from demseis.errors import InputError
-from demseis.generator.config.layout import (array_dtypes, crop_to, grid_of, on_grid,
-                                             param_codes, param_dtypes, sample_shape,
-                                             section_shape, time_axis_of, trace_spacing, trace_x)
-from demseis.generator.config.sampling import Render, RunSpec, config_of_run
+from demseis.generator.config.layout import (array_dtypes, crop_to, grid_of, on_grid, param_codes,
+                                             param_dtypes, sample_shape, section_shape,
+                                             time_axis_of, trace_spacing, trace_x)
+from demseis.generator.config.sampling import Render, RunParams, RunSpec, config_of_run
 from demseis.generator.config.settings import Config
 from demseis.generator.engines import Engine, EngineRun, State
 from demseis.generator.engines.runsetup import property_model_of
@@ -253,7 +253,7 @@ class ImagingInput:
 
 
 def imaging_input(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
-                  params: Mapping[str, Any]) -> ImagingInput:
+                  params: RunParams) -> ImagingInput:
     """The property columns of ``state`` at the traces, by the sweep's ``[output] rendering``
     (:data:`demseis.registry.RENDERINGS`); ``maps`` are its labels at the traces, ``params`` the
     run's parameters."""
@@ -262,7 +262,7 @@ def imaging_input(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
 
 
 def _element_columns(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
-                     params: Mapping[str, Any]) -> ImagingInput:
+                     params: RunParams) -> ImagingInput:
     """``elements``: the engine's property grids, at the nearest grid column of each trace."""
     grid = grid_of(cfg)
     vp, rho = state.vp_m_s, state.rho_kg_m3
@@ -274,7 +274,7 @@ def _element_columns(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
 
 
 def _strata_columns(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
-                    params: Mapping[str, Any]) -> ImagingInput:
+                    params: RunParams) -> ImagingInput:
     """``strata``: a fine stratigraphy looked up through the state's reference map
     (:mod:`demseis.generator.render.survey`).
 
@@ -300,7 +300,7 @@ def _strata_columns(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
         rho[~rock] = np.nan
         vp, rho = fill_gaps(vp), fill_gaps(rho)
     hold_small_steps(vp, rho)
-    change = float(params["fault_zone_impedance"])
+    change = params.fault_zone_impedance
     if change != 0.0:
         f = np.sqrt(damage_factor(np.repeat(maps["damage"], n, axis=0), change))
         vp, rho = vp * f, rho * f
@@ -331,7 +331,7 @@ class Rendering:
         ``ImagingInput.y0_cell`` (what ``[labels] throw_from = "offset"`` measures).
     """
 
-    columns: Callable[[Config, State, Mapping[str, np.ndarray], Mapping[str, Any]],
+    columns: Callable[[Config, State, Mapping[str, np.ndarray], RunParams],
                       ImagingInput]
     reference: bool = False
 

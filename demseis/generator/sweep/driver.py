@@ -37,7 +37,7 @@ from demseis.generator.config.settings import Config, load_config, parse_config
 from demseis.generator.engines import get_engine
 from demseis.generator.sweep.pipeline import run_shard
 from demseis.generator.sweep.workers import sigint_deferred
-from demseis.parameters import PARAMS, SAMPLING_STORED, SCENARIO, STORED
+from demseis.parameters import PARAMS, SAMPLING_STORED, STORED
 
 
 @dataclass
@@ -254,7 +254,7 @@ def _remove_orphan_creations(out: Path) -> None:
 def store_param_specs(cfg: Config) -> dict[str, Any]:
     """Per-sample parameters of the store of ``cfg`` with their declared unit and doc
     (demseis.parameters) and, for the categorical ones, the names of their codes."""
-    decl = {k: (p.unit, p.doc) for k, p in SCENARIO.items()}
+    decl = {k: (p.unit, p.doc) for k, p in cfg.scenario.items()}
     decl.update({p.name: (p.unit, p.doc) for p in STORED + SAMPLING_STORED})  # throw_m: reached
     codes = param_codes()
     return {k: ParamSpec(v, long_name=decl[k][1], units=decl[k][0] or "1",
