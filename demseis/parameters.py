@@ -433,7 +433,8 @@ _DECLARED: tuple[Param, ...] = (
     _p("impedance", bool, "sweep", False, section="output",
        doc="also store the smoothed impedance grid"),
     _p("domain", str, "sweep", "depth", choices=("depth", "time"), section="output",
-       doc="sections and labels in depth cells, or on a two-way-time axis"),
+       doc="sections and labels in depth cells, or on a two-way-time axis (a list or a "
+           "choice: each run its own, docs/seismic.md)"),
     _p("dt_s", float, "sweep", 0.002, 1.0e-4, 0.02, unit="s", section="output",
        doc="time-domain sample interval"),
     _p("time_window", str, "sweep", "model", choices=("model", "rock"), section="output",

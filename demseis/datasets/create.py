@@ -346,12 +346,15 @@ def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.n
     cell_m`` (``dx_m``, the trace spacing, where the store has it), depth below the top ``(i + 0.5) cell_m``; time-domain stores (``domain = "time"``)
     have rows ``twt = k dt_s`` (the axis of :func:`demseis.seismic.time_axis`). No coordinates
     when the attr is absent or does not match the sample shape, or when the sampling varies
-    from sample to sample (``grid["sampling"]``: each sample's is in the parameter table).
+    from sample to sample (``grid["sampling"]``: each sample's is in the parameter table); the
+    rows are ``row`` where the domain varies (``dt_s`` 0 in the table: a depth section).
     """
     if not isinstance(grid, Mapping):
         return "depth", {}
     time = grid.get("domain", "depth") == "time"
     row_dim = "twt" if time else "depth"
+    if "domain" in (grid.get("sampling") or {}):
+        return "row", {}             # depth cells in some samples, time samples in others
     if grid.get("sampling"):
         return row_dim, {}
     try:

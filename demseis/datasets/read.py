@@ -9,6 +9,7 @@ seismic section with its grid (:func:`read_section`) and its SEG-Y export (:func
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -142,13 +143,27 @@ def read_section(store: str | Path, sample: int) -> tuple[np.ndarray, dict]:
             or not 0 <= sample < n:
         raise InputError(f"--sample {sample!r} is out of range: the store has samples 0..{n - 1}")
     section = np.asarray(arr[int(sample)], dtype=np.float32)
-    if section.shape != (int(grid["nz"]), int(grid["nx"])) and grid.get("domain") != "time":
+    varied = "domain" in (grid.get("sampling") or {})      # rows: depth cells or time samples
+    if section.shape != (int(grid["nz"]), int(grid["nx"])) and grid.get("domain") != "time" \
+            and not varied:
         raise StoreError(f"seismic sample shape {section.shape} does not match the store grid "
                          f"(nz={grid['nz']}, nx={grid['nx']})")
     if not np.all(np.isfinite(section)):
         raise StoreError(f"sample {sample} of array 'seismic' in {str(path)!r} was never "
                          "written (its shard is missing or unfinished): it holds NaN")
     return section, dict(grid)
+
+
+def rows_text(grid: Mapping[str, Any]) -> str:
+    """What the rows of a store's samples are, from its ``grid`` attribute: depth cells, time
+    samples of one interval, or each run's own (``grid["sampling"]``)."""
+    varied = grid.get("sampling") or {}
+    if "domain" in varied:
+        return "depth cells or time samples (each run its own domain)"
+    if grid.get("domain") == "time":
+        return ("time samples (each run its own dt_s)" if "dt_s" in varied
+                else f"time samples of {float(grid.get('dt_s', math.nan)) * 1e3:g} ms")
+    return f"depth cells of {grid.get('cell_m')} m"
 
 
 def export_segy(store: str | Path, sample: int, out: str | Path, overwrite: bool = False) -> Path:
@@ -162,6 +177,8 @@ def export_segy(store: str | Path, sample: int, out: str | Path, overwrite: bool
     if grid.get("sampling"):  # each sample its own sampling, in the parameter table
         own = read_params(store).take(np.array([int(sample)]))
         grid = {**grid, "dx_m": float(own["trace_spacing_m"][0])}
+        if "domain" in grid["sampling"]:             # each run its own domain (dt_s 0: depth)
+            domain = "time" if float(own["dt_s"][0]) > 0 else "depth"
         if domain == "time":
             dt_s = float(own["dt_s"][0])
     if domain == "time" and (dt_s is None or not math.isfinite(float(dt_s))):
@@ -194,7 +211,7 @@ def store_summary(path: str | Path, table: DoneParams | None = None) -> list[str
     lines.append(f"samples: {n} in {n_shards} shards of {per_shard}; "
                  f"done shards: {int(done.sum()) // max(per_shard, 1)}")
     grid = attrs.get("grid", {})
-    lines.append(f"grid: {h} x {w} cells of {grid.get('cell_m')} m")
+    lines.append(f"grid: {h} x {w}: {rows_text(grid)}, {grid.get('cell_m')} m model cells")
     lines.append("sample arrays (role, units: description):")
     for name, spec in store_layout(root).specs.items():
         a = root[name]

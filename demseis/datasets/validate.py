@@ -220,7 +220,7 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
         missing = [k for k in _GRID_KEYS if k not in grid]
         if missing:
             problems.append(f"root attr 'grid' lacks {missing}")
-        elif grid.get("domain", "depth") == "time":
+        elif grid.get("domain", "depth") == "time" or "domain" in (grid.get("sampling") or {}):
             if (grid.get("nt"), grid["nx"]) != layout.shape:
                 problems.append(
                     f"time-domain grid nt, nx = ({grid.get('nt')}, {grid['nx']}) but samples are "

@@ -9,7 +9,7 @@ import json
 import numpy as np
 
 from demseis.datasets import open_store, read_sample, store_layout
-from demseis.datasets.read import done_samples, read_params
+from demseis.datasets.read import done_samples, read_params, rows_text
 from demseis.errors import InputError
 from demseis.evaluation.fieldio import read_amplitudes
 from demseis.evaluation.realism import (_section, adjacent_trace_correlation, amplitude_spectrum,
@@ -190,6 +190,7 @@ def store_measures(path, max_samples: int = 256, seed: int = 0) -> dict:
     sei_idx, lab_idx, selection = choose_samples(store, max_samples, seed)
     grid = store.attrs.get("grid", {})
     domain = grid.get("domain", "depth")
+    mixed = "domain" in (grid.get("sampling") or {})   # depth sections and time sections
     cell_m = float(grid.get("cell_m", np.nan))
     dt_s = float(grid.get("dt_s", np.nan)) if domain == "time" else None
     has = {a: a in store.arrays for a in ("fault", "fault_id", "slip_m", "dip_deg", "layer")}
@@ -227,7 +228,7 @@ def store_measures(path, max_samples: int = 256, seed: int = 0) -> dict:
                     s_ok = np.isfinite(np.asarray(a["slip_m"], np.float64)[fault]) \
                         & np.isfinite(np.asarray(a["dip_deg"], np.float64)[fault])
                     thr_s.append(2.0 * t / (v_px[s_ok] * dt_s))
-            else:
+            elif not mixed:
                 thr_s.append(t / cell_m)
     if lab_set:
         unfaulted = sum(1 for x in per100 if x == 0)
@@ -248,10 +249,9 @@ def store_measures(path, max_samples: int = 256, seed: int = 0) -> dict:
         "throw_m": _distribution(cat(thr_m)),
         "throw_samples": _distribution(cat(thr_s)),
     }
-    unit = (f"depth cells of {cell_m:g} m" if domain != "time" else
-            "time samples (each run its own dt_s)" if grid.get("sampling")
-            else f"time samples of {dt_s * 1e3:g} ms")
-    return {"path": str(store.path), "shape": [h, w], "domain": domain, "cell_m": cell_m,
+    unit = rows_text(grid)
+    return {"path": str(store.path), "shape": [h, w],
+            "domain": "depth and time" if mixed else domain, "cell_m": cell_m,
             "dt_s": dt_s, "pixels": unit, "selection": selection,
             "seismic_samples": [int(i) for i in sei_idx],
             "label_samples": sorted(int(i) for i in lab_set), "measures": measures,
@@ -305,7 +305,7 @@ def realism_report(store, field=None, *, max_samples: int = 256, seed: int = 0) 
         field_part = {"path": str(field), "shape": list(sec.shape), **section_measures(sec)}
     report: dict = {"store": store_measures(path, max_samples, seed), "field": field_part,
                     "targets": FIELD_TARGETS, "notes": []}
-    if report["store"]["domain"] != "time":
+    if report["store"]["domain"] == "depth":
         report["notes"].append(
             f"the store is in depth ({report['store']['pixels']}): its period, zero crossings and "
             "pixel dips count depth cells, a field section's count time samples (a time section "

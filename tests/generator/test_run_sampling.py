@@ -1,5 +1,5 @@
-"""Section sampling drawn per run: ``[output] dt_s`` and ``trace_spacing_m`` as lists or
-distributions, one shape per store by cropping, the sampling recorded per sample."""
+"""Section sampling drawn per run: ``[output] dt_s``, ``trace_spacing_m`` and ``domain`` as
+lists or distributions, one shape per store by cropping, the sampling recorded per sample."""
 
 from __future__ import annotations
 
@@ -54,11 +54,13 @@ def test_one_value_is_a_fixed_sampling_with_the_dict_it_always_had():
 
 
 @pytest.mark.parametrize("output, match", [
-    ({"domain": ["depth", "time"]}, "output.domain = .*takes one value"),
+    ({"domain": ["depth", "sideways"]}, r"output.domain\[1\] = 'sideways' is not allowed"),
+    ({"domain": {"dist": "uniform", "low": 0, "high": 1}}, "needs a numeric parameter"),
     ({"dt_s": [0.002, 0.004]}, "dt_s samples only time-domain sections"),
     ({"domain": "time", "dt_s": [0.002, 0.5]}, r"output.dt_s\[1\] = 0.5"),
     ({"trace_spacing_m": {"dist": "uniform", "low": 30.0, "high": 10.0}}, "low = 30.0 must be <"),
-    ({"rendering": ["strata"]}, "only .sweep. parameters and .output. dt_s, trace_spacing_m"),
+    ({"rendering": ["strata"]}, "only .sweep. parameters and .output. dt_s, trace_spacing_m, "
+                                "domain"),
 ])
 def test_bad_sampling_is_one_clear_error(output, match):
     with pytest.raises(ConfigError, match=match):
@@ -106,24 +108,36 @@ def test_each_sample_is_its_run_rendered_at_its_own_sampling_then_cropped(tmp_pa
     """The store against an independent path: every run rendered by a config with its drawn
     dt_s and trace spacing given as fixed values, then cropped by hand."""
     import demseis
-    from demseis.datasets import open_store
-    from demseis.generator.sweep.pipeline import run_shard
 
     path = generate_tiny(tmp_path, VARIED, "varied")
-    store = demseis.open(path)
     cfg = load_config(tmp_path / "varied.toml", preset="tiny")
+    owns = _each_sample_is_its_run_alone_then_cropped(path, cfg)
+    assert {own.output.dt_s for own in owns} == {0.002, 0.004}
+    assert demseis.open(path).attrs["grid"]["sampling"]["dt_s"] == [0.002, 0.004]
+
+
+def _each_sample_is_its_run_alone_then_cropped(path, cfg):
+    """Every run of the store at ``path`` rendered by ``cfg`` with the run's drawn sampling
+    given as fixed values, then cropped by hand, is what the store holds; the table records
+    each sample's sampling. Returns each run's config."""
+    import demseis
+    from demseis.datasets import open_store
+    from demseis.generator.config.settings import SAMPLING_KEYS
+    from demseis.generator.sweep.pipeline import run_shard
+
+    store = demseis.open(path)
     h, w = sample_shape(cfg)
     assert store.layout.shape == (h, w) and store.attrs["grid"]["nt"] == h
     g = open_store(path)
     seis, fault = np.asarray(g["seismic"][:]), np.asarray(g["fault"][:])
     params = store.params
     S = cfg.samples_per_run
-    dts = set()
+    owns = []
     for run in range(cfg.sweep.n_runs):
         own = config_of_run(cfg, run)
         fixed = dict(cfg.to_dict())
-        fixed["output"] = {**fixed["output"], "dt_s": own.output.dt_s,
-                           "trace_spacing_m": own.output.trace_spacing_m}
+        fixed["output"] = {**fixed["output"],
+                           **{k: getattr(own.output, k) for k in SAMPLING_KEYS}}
         alone = parse_config(fixed)
         assert alone.sampling == {}
         data = run_shard(alone, run)
@@ -133,12 +147,55 @@ def test_each_sample_is_its_run_rendered_at_its_own_sampling_then_cropped(tmp_pa
         rows = slice(run * S, (run + 1) * S)
         np.testing.assert_array_equal(seis[rows], data.arrays["seismic"][:, :h, left:left + w])
         np.testing.assert_array_equal(fault[rows], data.arrays["fault"][:, :h, left:left + w])
-        np.testing.assert_allclose(params["dt_s"][rows], own.output.dt_s, rtol=1e-6)
+        dt = own.output.dt_s if own.output.domain == "time" else 0.0
+        np.testing.assert_allclose(params["dt_s"][rows], dt, rtol=1e-6)
         np.testing.assert_allclose(params["trace_spacing_m"][rows], trace_spacing(own),
                                    rtol=1e-6)
-        dts.add(own.output.dt_s)
-    assert dts == {0.002, 0.004}
-    assert store.attrs["grid"]["sampling"]["dt_s"] == [0.002, 0.004]
+        owns.append(own)
+    return owns
+
+
+MIXED = """
+[sweep]
+n_runs = 4
+[model]
+engine = "kinematic"
+[output]
+domain = ["depth", "time"]
+dt_s = 0.004
+"""
+
+
+def test_a_store_of_depth_and_time_sections(tmp_path):
+    """``domain`` as a list: runs alternate depth and time sections, each cut to the store's
+    one shape (the fewer rows of the two), its dt_s 0 in the table where it is a depth
+    section; the store validates, the xarray rows are plain rows, a SEG-Y export writes each
+    sample's own axis."""
+    import segyio
+
+    from demseis.datasets import to_xarray, validate_store
+    from demseis.datasets.read import export_segy
+    from demseis.generator.sweep.driver import domain_text
+
+    path = generate_tiny(tmp_path, MIXED, "mixed")
+    cfg = load_config(tmp_path / "mixed.toml", preset="tiny")
+    assert cfg.sampling == {"domain": GridSpec(("depth", "time"))}
+    depth, time = (section_shape(parse_config({**cfg.to_dict(), "output": {
+        **cfg.to_dict()["output"], "domain": d}})) for d in ("depth", "time"))
+    assert sample_shape(cfg) == (min(depth[0], time[0]), min(depth[1], time[1]))
+    owns = _each_sample_is_its_run_alone_then_cropped(path, cfg)
+    assert [own.output.domain for own in owns] == ["depth", "time", "depth", "time"]
+    assert validate_store(path).ok
+    assert "row" in to_xarray(path).dims
+    S = cfg.samples_per_run
+    for run, own in enumerate(owns[:2]):
+        out = export_segy(path, run * S, tmp_path / f"r{run}.sgy")
+        with segyio.open(out, ignore_geometry=True) as f:
+            step = segyio.tools.dt(f) / 1e6
+        # a time section's dt in microseconds; a depth section's cell in millimetres
+        want = 0.004 if own.output.domain == "time" else cfg.grid.cell_m / 1000.0
+        assert math.isclose(step, want), (own.output.domain, step)
+    assert domain_text(cfg) == "depth or time domain per run"      # generate --dry-run says it
 
 
 def test_a_sample_exported_to_segy_carries_its_own_sampling(tmp_path):

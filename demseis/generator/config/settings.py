@@ -363,7 +363,7 @@ def parse_config(raw: dict[str, Any], *, source: str = "config") -> Config:
 
 #: the ``[output]`` keys that take a list or a distribution, drawn per run: the sampling of
 #: the sections (one shape per store all the same, see :func:`demseis.generator.config.layout.sample_shape`)
-SAMPLING_KEYS = ("dt_s", "trace_spacing_m")
+SAMPLING_KEYS = ("dt_s", "trace_spacing_m", "domain")
 
 
 def _parse_output(raw: Any) -> tuple[Any, dict[str, Spec]]:
@@ -372,10 +372,6 @@ def _parse_output(raw: Any) -> tuple[Any, dict[str, Spec]]:
     value of such a key: its first value, or the low end of its range."""
     if not isinstance(raw, dict):
         raise ConfigError(f"[output] must be a table, got {type(raw).__name__}")
-    if isinstance(raw.get("domain"), (list, dict)):
-        raise ConfigError(f"output.domain = {raw['domain']!r}: takes one value, 'depth' or 'time' "
-                          "(a store's sections share one vertical axis; write one store per "
-                          "domain)")
     fixed = {k: v for k, v in raw.items() if k not in SAMPLING_KEYS or not isinstance(v, (list, dict))}
     output = _parse_table(fixed, _OUTPUT_DEFS, "output")
     sampling: dict[str, Spec] = {}
@@ -452,7 +448,9 @@ def _cross_checks(cfg: Config) -> None:
                 BedModel(**{**fixed, key: value}).validate()
             except ConfigError as exc:  # BedModel names its fields strata.<name>
                 raise ConfigError(str(exc).replace("strata.", "sweep.")) from None
-    if "dt_s" in cfg.sampling and cfg.output.domain != "time":
+    domains = (spec_candidates(cfg.sampling["domain"]) if "domain" in cfg.sampling
+               else (cfg.output.domain,))
+    if "dt_s" in cfg.sampling and "time" not in domains:
         raise ConfigError("output.dt_s is given several values, but output.domain = "
                           f"{cfg.output.domain!r}: dt_s samples only time-domain sections (set "
                           "[output] domain = 'time', or give dt_s one value)")

@@ -31,7 +31,7 @@ from demseis.datasets.lock import pid_alive
 from demseis.errors import ConfigError, SimulationError, StoreError
 from demseis.generator.config.layout import (array_dtypes, grid_of, on_grid, param_codes,
                                              param_dtypes, sample_shape, trace_spacing)
-from demseis.generator.config.params import _json_value
+from demseis.generator.config.params import _json_value, spec_candidates
 from demseis.generator.config.sampling import run_params
 from demseis.generator.config.settings import Config, load_config, parse_config
 from demseis.generator.engines import get_engine
@@ -111,6 +111,13 @@ class SweepSummary:
         return out
 
 
+def domain_text(cfg: Config) -> str:
+    """``"depth domain"``, ``"time domain"``, or the domains drawn per run."""
+    if "domain" in cfg.sampling:
+        return " or ".join(map(str, spec_candidates(cfg.sampling["domain"]))) + " domain per run"
+    return f"{cfg.output.domain} domain"
+
+
 def store_attrs(cfg: Config) -> dict[str, Any]:
     """Root attributes the driver writes when it creates a store."""
     grid = grid_of(cfg)
@@ -119,7 +126,7 @@ def store_attrs(cfg: Config) -> dict[str, Any]:
                                   "domain": cfg.output.domain}
     if not on_grid(cfg):
         grid_attrs["dx_m"] = trace_spacing(cfg)  # traces, not cells: x = x0 + (j + 0.5) dx
-    if cfg.output.domain == "time":
+    if cfg.output.domain == "time" or "domain" in cfg.sampling:  # rows: time samples (some)
         grid_attrs["dt_s"] = cfg.output.dt_s
         grid_attrs["nt"] = sample_shape(cfg)[0]
     if cfg.sampling:  # each run its own: dt_s and dx_m above are nominal, the table has each
@@ -338,7 +345,7 @@ def dry_run_plan(cfg: Config, pending: int | None = None, why: str = "") -> list
         + (f"; {why}" if why else "") + f"); {what}",
         f"samples: {n_runs * S} ({cfg.model.n_snapshots} snapshots x "
         f"{cfg.renders_per_run_snapshot} renders per run)",
-        f"sample shape: {h} x {w} ({cfg.output.domain} domain; {grid.cell_m:g} m cells"
+        f"sample shape: {h} x {w} ({domain_text(cfg)}; {grid.cell_m:g} m cells"
         + ("; " + ", ".join(sorted(cfg.sampling)) + " drawn per run, sections cropped to it"
            if cfg.sampling else "") + "); arrays: "
         + ", ".join(f"{k} {v}" for k, v in array_dtypes(cfg).items()),
