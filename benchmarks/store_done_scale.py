@@ -21,7 +21,16 @@ Each time is the median of ``--repeats`` calls in this process (page cache warm)
 the code of any version that has ``prepare_store``, ``shard_task`` and ``write_shard`` (the
 "before" figures of docs/store.md come from the commit before the parameter table).
 
+``--store PATH`` measures an existing store instead, cold and warm: before each cold call the
+page cache is dropped (``/proc/sys/vm/drop_caches``, as root; without the right, every call
+is warm and the line says ``"cold": null``), and one JSON line per measure gives the median:
+``info_cli`` (``python -m demseis info PATH`` in a new process, imports included),
+``imports_cli`` (that process importing what ``info`` imports, without reading the store),
+``info`` and ``open_dataset`` as above. Run it with two checkouts on ``PYTHONPATH`` to compare
+code side by side on one store.
+
     PYTHONPATH=$PWD python benchmarks/store_done_scale.py [--done 100,1000,10000] [--repeats 3]
+    PYTHONPATH=$PWD python benchmarks/store_done_scale.py --store S.zarr [--repeats 3]
 """
 
 from __future__ import annotations
@@ -31,6 +40,8 @@ import json
 import os
 import shutil
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -53,7 +64,11 @@ def main() -> None:
     ap.add_argument("--done", default="100,1000,10000")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--dir", default=None, help="where to write the store (default: a temp dir)")
+    ap.add_argument("--store", default=None, help="measure this existing store, cold and warm")
     args = ap.parse_args()
+    if args.store:
+        _cold_and_warm(Path(args.store), args.repeats)
+        return
 
     import numpy as np
 
@@ -120,6 +135,51 @@ def main() -> None:
                       flush=True)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _drop_page_cache() -> bool:
+    """Drop the page cache (root only); whether it was dropped."""
+    try:
+        os.sync()
+        Path("/proc/sys/vm/drop_caches").write_text("3\n")
+        return True
+    except OSError:
+        return False
+
+
+def _cold_and_warm(path: Path, repeats: int) -> None:
+    """One JSON line per measure and state (cold, warm) on the store ``path``."""
+    from demseis.datasets import FaultSegDataset
+    from demseis.datasets.read import store_summary
+    from demseis.generator.sweep.faultinfo import fault_distribution
+
+    def cli(code: str) -> float:
+        t = time.perf_counter()
+        subprocess.run([sys.executable, "-c", code], check=True, stdout=subprocess.DEVNULL)
+        return time.perf_counter() - t
+
+    measures = {
+        "info_cli": lambda: cli(f"from demseis.cli import main; main(['info', {str(path)!r}])"),
+        "imports_cli": lambda: cli("import demseis.cli.commands.store"),
+        "info": lambda: _timed(lambda: (store_summary(path), fault_distribution(path))),
+        "open_dataset": lambda: _timed(lambda: FaultSegDataset(path)),
+    }
+    for name, run in measures.items():
+        for state in ("cold", "warm"):
+            times, dropped = [], None
+            for _ in range(repeats):
+                if state == "cold":
+                    dropped = _drop_page_cache()
+                times.append(run())
+            print(json.dumps({"measure": name, "store": str(path), "state": state,
+                              "cold": dropped if state == "cold" else False,
+                              "value": round(statistics.median(times), 3)}), flush=True)
+
+
+def _timed(fn) -> float:
+    t = time.perf_counter()
+    fn()
+    return time.perf_counter() - t
 
 
 if __name__ == "__main__":

@@ -206,10 +206,13 @@ def store_summary(path: str | Path, table: DoneParams | None = None) -> list[str
     lines = [f"store: {path}", f"demseis schema: {attrs.get('demseis', {})}"]
     n, h, w = root["seismic"].shape
     n_shards = int(root["shard_done"].shape[0]) if "shard_done" in root else 1
-    done = done_samples(root, int(n), path, require_any=False)
     per_shard = n // max(n_shards, 1)
-    lines.append(f"samples: {n} in {n_shards} shards of {per_shard}; "
-                 f"done shards: {int(done.sum()) // max(per_shard, 1)}")
+    table = read_done_params(path) if table is None else table
+    if table.records is not None:        # the table's done shards: the flags read once
+        n_done = int(table.shards.size)
+    else:                                # a store assembled by hand, read through zarr
+        n_done = int(done_samples(root, int(n), path, require_any=False).sum()) // max(per_shard, 1)
+    lines.append(f"samples: {n} in {n_shards} shards of {per_shard}; done shards: {n_done}")
     grid = attrs.get("grid", {})
     lines.append(f"grid: {h} x {w}: {rows_text(grid)}, {grid.get('cell_m')} m model cells")
     lines.append("sample arrays (role, units: description):")
@@ -218,7 +221,6 @@ def store_summary(path: str | Path, table: DoneParams | None = None) -> list[str
         lines.append(f"  {name:10s} {str(a.dtype):8s} shape {tuple(a.shape)} chunks "
                      f"{tuple(a.chunks)}  {spec.role}, {spec.units}: {spec.description}")
     lines.append("parameters (over done samples):")
-    table = read_done_params(path) if table is None else table
     for name, vals in table.values.items():
         if vals.size == 0:
             continue
