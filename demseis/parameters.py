@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -626,6 +627,21 @@ SAMPLING_STORED: tuple[Stored, ...] = (
     Stored("dt_s", "float32", "run", "s", "sample interval of the section (0: a depth section)"),
     Stored("trace_spacing_m", "float32", "run", "m", "distance between the section's traces"),
 )
+
+
+def declared_dataclass(name: str, params: Iterable[Param], *, module: str, doc: str,
+                       bases: tuple[type, ...] = (),
+                       extra: Sequence[tuple[str, type, Any]] = ()) -> type:
+    """A frozen dataclass ``name`` with one field per declaration of ``params`` (its kind, or
+    ``kind | None`` where it is optional, and its default), then the ``extra`` fields, made in
+    ``module`` (so that it pickles by reference: configs and run parameters travel to the
+    dask workers)."""
+    fields = [(p.name, p.kind | None if p.optional else p.kind, dataclasses.field(default=p.default))
+              for p in params]
+    cls = dataclasses.make_dataclass(name, [*fields, *extra], bases=bases, frozen=True)
+    cls.__module__ = module
+    cls.__doc__ = doc
+    return cls
 
 
 def param(name: str) -> Param:

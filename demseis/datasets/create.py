@@ -21,8 +21,8 @@ from demseis import __version__
 from demseis.datasets._nodes import (create_arrays, flag_compressors, put_files,
                                      sample_compressors, small_compressors, zarr_files, zarr_lib)
 from demseis.datasets.index import index_block
-from demseis.datasets.layout import (SCHEMA_VERSION, StoreLayout, is_demseis_store, open_store,
-                                     root_metadata_lost, store_layout)
+from demseis.datasets.layout import (SCHEMA_VERSION, StoreLayout, domain_varies, is_demseis_store,
+                                     open_store, root_metadata_lost, store_layout)
 from demseis.datasets.records import ParamColumn, fill_value_for, record_dtype, table_attributes
 from demseis.errors import InputError, StoreError
 from demseis.schema import SAMPLE_ARRAYS, sample_array, stored_arrays
@@ -353,7 +353,7 @@ def _grid_coords(grid: Any, shape: tuple[int, int]) -> tuple[str, dict[str, np.n
         return "depth", {}
     time = grid.get("domain", "depth") == "time"
     row_dim = "twt" if time else "depth"
-    if "domain" in (grid.get("sampling") or {}):
+    if domain_varies(grid):
         return "row", {}             # depth cells in some samples, time samples in others
     if grid.get("sampling"):
         return row_dim, {}

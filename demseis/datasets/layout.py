@@ -63,6 +63,12 @@ NOT_SAMPLE_ARRAYS = ("shard_done", "depth", "twt", "x", "params", "params_index"
                      "params_index_files")
 
 
+def domain_varies(grid: Any) -> bool:
+    """Whether a store's ``grid`` attribute says each run has its own domain (depth sections
+    and time sections in one store; the parameter table's ``dt_s`` is 0 for a depth one)."""
+    return isinstance(grid, Mapping) and "domain" in (grid.get("sampling") or {})
+
+
 def root_metadata(path: Path) -> dict | None:
     """Parsed ``zarr.json`` of ``path`` or None if there is none / it is not JSON."""
     meta = path / "zarr.json"

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from demseis.datasets.checked import CheckedArray
-from demseis.datasets.layout import open_store, store_layout
+from demseis.datasets.layout import domain_varies, open_store, store_layout
 from demseis.datasets.status import shard_status
 from demseis.datasets.table import DoneParams, FullParams, read_done_params
 from demseis.errors import InputError, StoreError
@@ -143,9 +143,8 @@ def read_section(store: str | Path, sample: int) -> tuple[np.ndarray, dict]:
             or not 0 <= sample < n:
         raise InputError(f"--sample {sample!r} is out of range: the store has samples 0..{n - 1}")
     section = np.asarray(arr[int(sample)], dtype=np.float32)
-    varied = "domain" in (grid.get("sampling") or {})      # rows: depth cells or time samples
     if section.shape != (int(grid["nz"]), int(grid["nx"])) and grid.get("domain") != "time" \
-            and not varied:
+            and not domain_varies(grid):      # rows: depth cells or time samples
         raise StoreError(f"seismic sample shape {section.shape} does not match the store grid "
                          f"(nz={grid['nz']}, nx={grid['nx']})")
     if not np.all(np.isfinite(section)):
@@ -157,11 +156,10 @@ def read_section(store: str | Path, sample: int) -> tuple[np.ndarray, dict]:
 def rows_text(grid: Mapping[str, Any]) -> str:
     """What the rows of a store's samples are, from its ``grid`` attribute: depth cells, time
     samples of one interval, or each run's own (``grid["sampling"]``)."""
-    varied = grid.get("sampling") or {}
-    if "domain" in varied:
+    if domain_varies(grid):
         return "depth cells or time samples (each run its own domain)"
     if grid.get("domain") == "time":
-        return ("time samples (each run its own dt_s)" if "dt_s" in varied
+        return ("time samples (each run its own dt_s)" if "dt_s" in (grid.get("sampling") or {})
                 else f"time samples of {float(grid.get('dt_s', math.nan)) * 1e3:g} ms")
     return f"depth cells of {grid.get('cell_m')} m"
 
@@ -177,7 +175,7 @@ def export_segy(store: str | Path, sample: int, out: str | Path, overwrite: bool
     if grid.get("sampling"):  # each sample its own sampling, in the parameter table
         own = read_params(store).take(np.array([int(sample)]))
         grid = {**grid, "dx_m": float(own["trace_spacing_m"][0])}
-        if "domain" in grid["sampling"]:             # each run its own domain (dt_s 0: depth)
+        if domain_varies(grid):                      # each run its own domain (dt_s 0: depth)
             domain = "time" if float(own["dt_s"][0]) > 0 else "depth"
         if domain == "time":
             dt_s = float(own["dt_s"][0])

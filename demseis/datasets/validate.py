@@ -22,8 +22,8 @@ from demseis.datasets._shardio import check_chunk_file
 from demseis.datasets.index import INDEX_ARRAYS, indexed_rows, written_blocks
 from demseis.datasets.integrity import read_done_flags, shard_damage
 from demseis.datasets.layout import (SCHEMA_VERSION, StoreLayout, array_metas,
-                                     check_store_metadata, metadata_problems, open_store,
-                                     store_layout)
+                                     check_store_metadata, domain_varies, metadata_problems,
+                                     open_store, store_layout)
 from demseis.datasets.particles import particle_group_name, read_particles
 from demseis.datasets.records import fill_value_for, read_table_chunk, unpack
 from demseis.errors import StoreError
@@ -220,7 +220,7 @@ def validate_store(path: str | Path, *, check_particles: bool = True,
         missing = [k for k in _GRID_KEYS if k not in grid]
         if missing:
             problems.append(f"root attr 'grid' lacks {missing}")
-        elif grid.get("domain", "depth") == "time" or "domain" in (grid.get("sampling") or {}):
+        elif grid.get("domain", "depth") == "time" or domain_varies(grid):
             if (grid.get("nt"), grid["nx"]) != layout.shape:
                 problems.append(
                     f"time-domain grid nt, nx = ({grid.get('nt')}, {grid['nx']}) but samples are "

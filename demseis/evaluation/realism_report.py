@@ -9,6 +9,7 @@ import json
 import numpy as np
 
 from demseis.datasets import open_store, read_sample, store_layout
+from demseis.datasets.layout import domain_varies
 from demseis.datasets.read import done_samples, read_params, rows_text
 from demseis.errors import InputError
 from demseis.evaluation.fieldio import read_amplitudes
@@ -190,7 +191,7 @@ def store_measures(path, max_samples: int = 256, seed: int = 0) -> dict:
     sei_idx, lab_idx, selection = choose_samples(store, max_samples, seed)
     grid = store.attrs.get("grid", {})
     domain = grid.get("domain", "depth")
-    mixed = "domain" in (grid.get("sampling") or {})   # depth sections and time sections
+    mixed = domain_varies(grid)                        # depth sections and time sections
     cell_m = float(grid.get("cell_m", np.nan))
     dt_s = float(grid.get("dt_s", np.nan)) if domain == "time" else None
     has = {a: a in store.arrays for a in ("fault", "fault_id", "slip_m", "dip_deg", "layer")}

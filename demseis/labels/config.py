@@ -8,12 +8,11 @@ checks each against it and adds the rules that combine several keys.
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 
 from demseis.errors import ConfigError
 from demseis.labels.picks import PickConfig
-from demseis.parameters import PARAMS, Param
+from demseis.parameters import PARAMS, Param, declared_dataclass
 
 #: the ``[labels]`` declarations, in field order
 LABEL_PARAMS: dict[str, Param] = {k: p for k, p in PARAMS.items() if p.section == "labels"}
@@ -78,15 +77,9 @@ class _LabelRules:
         return cls(**table).validate()
 
 
-def _field(pdef: Param) -> tuple[str, Any, Any]:
-    kind = pdef.kind | None if pdef.optional else pdef.kind
-    return pdef.name, kind, dataclasses.field(default=pdef.default)
-
-
-LabelConfig = dataclasses.make_dataclass(
-    "LabelConfig", [_field(p) for p in LABEL_PARAMS.values()], bases=(_LabelRules,), frozen=True)
-LabelConfig.__module__ = __name__  # pickles by reference (configs travel to the dask workers)
-LabelConfig.__doc__ = """How per-element strain and displacement become fault, damage-zone, strain
-and layer labels: one field per ``[labels]`` parameter of :mod:`demseis.parameters` (``demseis
-params`` documents each: ``method``, ``min_slip_m``, ``fault_style``, ...). Build it with keyword
-arguments or :meth:`from_mapping`; :meth:`validate` checks it."""
+LabelConfig = declared_dataclass("LabelConfig", LABEL_PARAMS.values(), module=__name__,
+                                 bases=(_LabelRules,), doc="""How per-element strain and
+displacement become fault, damage-zone, strain and layer labels: one field per ``[labels]``
+parameter of :mod:`demseis.parameters` (``demseis params`` documents each: ``method``,
+``min_slip_m``, ``fault_style``, ...). Build it with keyword arguments or :meth:`from_mapping`;
+:meth:`validate` checks it.""")

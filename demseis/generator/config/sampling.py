@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from demseis.generator.config.params import DistSpec, Fixed, GridSpec
-from demseis.generator.config.settings import Config, _cross
-from demseis.parameters import SCENARIO, Param
+from demseis.generator.config.settings import Config, _cross, engine_parameters
+from demseis.parameters import SCENARIO, Param, declared_dataclass
 from demseis.seismic.wavelet import Wavelet
 
 #: second spawn key of a run's seed tree (values fixed: changing one changes every dataset)
@@ -118,12 +118,9 @@ class _RunValues(Mapping):
     engine_values: tuple[tuple[str, Any], ...]
 
     def __getitem__(self, key: str) -> Any:
-        if key in RUN_KEYS:
-            return getattr(self, key)
-        for name, value in self.engine_values:
-            if name == key:
-                return value
-        raise KeyError(key)
+        if key not in RUN_KEYS and all(name != key for name, _ in self.engine_values):
+            raise KeyError(key)
+        return getattr(self, key)
 
     def __getattr__(self, name: str) -> Any:   # only for names that are not fields
         if name.startswith("__") or name == "engine_values":
@@ -167,20 +164,14 @@ class _RunValues(Mapping):
         return dataclasses.replace(self.of({k: merged[k] for k in RUN_KEYS}), engine_values=own)
 
 
-def _run_field(pdef: Param) -> tuple[str, type, Any]:
-    return pdef.name, pdef.kind, dataclasses.field(default=pdef.default)
-
-
-RunParams = dataclasses.make_dataclass(
-    "RunParams", [_run_field(SCENARIO[k]) for k in RUN_KEYS]
-    + [("engine_values", tuple, dataclasses.field(default=()))],
-    bases=(_RunValues,), frozen=True)
-RunParams.__module__ = __name__  # pickles by reference (run specs travel to the dask workers)
-RunParams.__doc__ = """The run-level parameter values of one run, built once by
-:func:`run_params`: a frozen object with one typed field per run-level parameter of
-:mod:`demseis.parameters` (``dip_deg: float``, ``structure: str``, ``n_layers: int``, ...) and
-``engine_values``, the (name, value) pairs of the engine's own parameters; it reads as a
-mapping too (see ``_RunValues``)."""
+RunParams = declared_dataclass(
+    "RunParams", (SCENARIO[k] for k in RUN_KEYS), module=__name__, bases=(_RunValues,),
+    extra=[("engine_values", tuple, dataclasses.field(default=()))],
+    doc="""The run-level parameter values of one run, built once by :func:`run_params`: a
+frozen object with one typed field per run-level parameter of :mod:`demseis.parameters`
+(``dip_deg: float``, ``structure: str``, ``n_layers: int``, ...) and ``engine_values``, the
+(name, value) pairs of the engine's own parameters; it reads as a mapping too (see
+``_RunValues``).""")
 
 
 @dataclass(frozen=True)
@@ -206,10 +197,10 @@ def run_params(cfg: Config, run: int) -> RunParams:
     combination ``i mod G``. Distributions are drawn from node ``(run, SEED_RUN_PARAMS)`` in
     key order: the declared parameters, then the engine's own.
     """
-    scenario = cfg.scenario
-    run_specs = {k: s for k, s in cfg.sweep.params.items() if scenario[k].level == "run"}
-    return RunParams.of(_draw(run_specs, run, rng_at(cfg, run, SEED_RUN_PARAMS)),
-                        {k: p for k, p in scenario.items() if k not in SCENARIO})
+    own = engine_parameters(cfg.model.engine)
+    run_specs = {k: s for k, s in cfg.sweep.params.items()
+                 if k in own or SCENARIO[k].level == "run"}
+    return RunParams.of(_draw(run_specs, run, rng_at(cfg, run, SEED_RUN_PARAMS)), own)
 
 
 def plan_run(cfg: Config, run: int) -> RunSpec:

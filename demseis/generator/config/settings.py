@@ -36,7 +36,8 @@ from demseis.errors import ConfigError, InputError
 from demseis.generator.config.params import (DistSpec, Fixed, GridSpec, Spec, parse_spec,
                                              spec_candidates, spec_values_hint)
 from demseis.labels import LabelConfig
-from demseis.parameters import BED_FIELDS, PARAMS, PROPERTY_FIELDS, SCENARIO, Param
+from demseis.parameters import (BED_FIELDS, PARAMS, PROPERTY_FIELDS, SCENARIO, Param,
+                                declared_dataclass)
 from demseis.registry import ENGINES, RENDERINGS, load_plugins
 from demseis.seismic import BedModel, PropertyModel
 
@@ -55,11 +56,7 @@ def _default(name: str) -> Any:
 def _section_class(table: str, cls_name: str, doc: str) -> type:
     """A frozen dataclass with one field per declared key of ``[table]`` (type and default from
     :mod:`demseis.parameters`; ``demseis params`` documents each field)."""
-    spec = [(k, p.kind, field(default=p.default)) for k, p in _section(table).items()]
-    cls = dataclasses.make_dataclass(cls_name, spec, frozen=True)
-    cls.__module__ = __name__  # pickles by reference (configs travel to the dask workers)
-    cls.__doc__ = doc
-    return cls
+    return declared_dataclass(cls_name, _section(table).values(), module=__name__, doc=doc)
 
 
 ModelSection = _section_class("model", "ModelSection", """The DEM box and run control; fixed for a
