@@ -11,18 +11,33 @@ same records ``INDEX_BLOCK`` shards at a time:
   index does not hold the shard.
 
 A reader takes a done shard's records from the index only while its table chunk file is the
-one that was indexed (its size and its last 4 bytes, the chunk's crc32c: one small read per
-shard); any other done shard (written since, or rewritten) is read from its own chunk. So the
-index is never wrong, only incomplete, and it needs no lock among the sweep's workers:
-only the driver writes it (:func:`update_index`, while the sweep runs and when it ends), and
-``demseis migrate`` rebuilds it. Each file is written atomically, the records before the
-identities, so a driver killed between the two leaves identities that still match what they
-name.
+one that was indexed (its size and its last 4 bytes, the chunk's crc32c); any other done shard
+(written since, or rewritten) is read from its own chunk. So the index is never wrong, only
+incomplete, and it needs no lock among the sweep's workers: only the driver writes it
+(:func:`update_index`, while the sweep runs and when it ends), and ``demseis migrate`` rebuilds
+it. Each file is written atomically, the records before the identities, so a driver killed
+between the two leaves identities that still match what they name.
+
+Checking that identity costs one small read per done shard: 1.2 s for 10^4 shards with the
+page cache dropped on a local disk, one metadata round trip each on a network filesystem. A
+reader skips it when the index is *current* (:func:`index_current`): a full update
+(``shards=None``: the end of every sweep, ``demseis migrate``) checked every entry against its
+chunk and then set the modification time of ``params_index_files/zarr.json`` (its bytes stay
+the same), and the table's directory (``params/``) has not changed since. Every chunk write is
+a rename into that directory (zarr's and :func:`~demseis.datasets._shardio.put_file`), which
+sets the directory's modification time, so a chunk written after the update makes the index
+not current, and readers check identities again until the next full update. A current index
+is still spot-checked: one identity per block (an index block copied from another store, or
+restored from a backup, fails it and that block is checked shard by shard). Before a sweep
+dispatches its runs, the driver drops the entries of every shard it is about to write
+(:func:`update_index` with those shards not done), so no entry can name a chunk that a
+running sweep replaces.
 """
 
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -91,10 +106,31 @@ def read_block(path: Path, metas: Mapping[str, ArrayMeta], b: int) -> IndexBlock
     return IndexBlock(b, rows, ids)
 
 
+def stamp_file(path: Path) -> Path:
+    """The file whose modification time records the last full update of the index."""
+    return path / INDEX_ARRAYS[1] / "zarr.json"
+
+
+def index_current(path: Path) -> bool:
+    """True when the last full :func:`update_index` came after the last change of the table's
+    directory (strictly later modification time: a filesystem with coarse times says False
+    more often, never True wrongly); False when either cannot be read."""
+    try:
+        stamp = os.stat(stamp_file(path)).st_mtime_ns
+        table = os.stat(path / "params").st_mtime_ns
+    except OSError:
+        return False
+    return stamp > table
+
+
 def indexed_rows(path: Path, metas: Mapping[str, ArrayMeta], shards: np.ndarray,
-                 s: int) -> dict[int, np.ndarray]:
+                 s: int, *, current: bool = False) -> dict[int, np.ndarray]:
     """The records of each shard of ``shards`` that the index holds for its current table
-    chunk file: shard -> (S, R) uint8."""
+    chunk file: shard -> (S, R) uint8.
+
+    ``current``: the index is current (:func:`index_current`, checked by the caller): each
+    block's entries are taken after one of them matches its chunk, the rest without a read.
+    """
     out: dict[int, np.ndarray] = {}
     if not all(n in metas for n in INDEX_ARRAYS) or not len(shards):
         return out
@@ -103,11 +139,19 @@ def indexed_rows(path: Path, metas: Mapping[str, ArrayMeta], shards: np.ndarray,
         blk = read_block(path, metas, b)
         if blk is None:
             continue
+        trust, matched = current, False  # one match first; a mismatch: check every entry
         for k in shards[(shards // per) == b].tolist():
             j = k - b * per
             held = tuple(int(v) for v in blk.files[j])
-            if any(held) and chunk_identity(table.block_file(path, k)) == held:
+            if not any(held):
+                continue
+            if trust and matched:
                 out[k] = blk.records[j * s:(j + 1) * s]
+            elif chunk_identity(table.block_file(path, k)) == held:
+                out[k] = blk.records[j * s:(j + 1) * s]
+                matched = True
+            else:
+                trust = False
     return out
 
 
@@ -120,12 +164,15 @@ def update_index(path: str | Path, done: np.ndarray | None = None,
 
     ``done``: the (n_shards,) done flags if the caller has them (else read from the store).
     ``shards``: only the blocks holding these shards (the runs a sweep finished since its last
-    update), else every block.
+    update, or the runs it is about to write, given as not done), else every block. Only a
+    full update (every block) makes the index current (:func:`index_current`), and only if
+    the table's directory did not change while it ran.
     """
     path = Path(path)
     metas = array_metas(path)
     if not all(n in metas for n in INDEX_ARRAYS) or "params" not in metas:
         return 0
+    table_time = _mtime_ns(path / "params") if shards is None else None
     layout = layout_of(metas)
     s = layout.samples_per_shard
     id_meta, rec_meta, table = metas["params_index_files"], metas["params_index"], metas["params"]
@@ -170,7 +217,30 @@ def update_index(path: str | Path, done: np.ndarray | None = None,
         if dirty:
             write_block(path, rec_meta, b, blk.records, write_empty=True)
             write_block(path, id_meta, b, blk.files)
+    if table_time is not None and _mtime_ns(path / "params") == table_time:
+        _stamp_after(stamp_file(path), table_time)
     return changed
+
+
+def _mtime_ns(p: Path) -> int | None:
+    try:
+        return os.stat(p).st_mtime_ns
+    except OSError:
+        return None
+
+
+def _stamp_after(f: Path, t_ns: int, tries: int = 20) -> None:
+    """Set the modification time of ``f`` to now, retried for a few milliseconds while the
+    clock (the kernel's coarse one, ticks of a few ms) has not passed ``t_ns``: the index is
+    current only when its stamp is strictly later than the table's last change."""
+    for _ in range(tries):
+        try:
+            os.utime(f)
+        except OSError:  # read-only store or a missing file: the index stays not current
+            return
+        if os.stat(f).st_mtime_ns > t_ns:
+            return
+        time.sleep(0.002)
 
 
 def written_blocks(path: Path, meta: ArrayMeta) -> set[int]:

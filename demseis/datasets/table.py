@@ -25,7 +25,7 @@ import numpy as np
 
 from demseis.datasets._shardio import ArrayMeta
 from demseis.datasets.checked import read_error_text
-from demseis.datasets.index import indexed_rows, read_table_chunk
+from demseis.datasets.index import index_current, indexed_rows, read_table_chunk
 from demseis.datasets.integrity import flag_files, read_done_flags
 from demseis.datasets.layout import (StoreLayout, array_metas, check_store_metadata, layout_of,
                                      open_store, param_columns, sample_specs)
@@ -95,10 +95,11 @@ def done_records(path: Path, members: Mapping[str, ArrayMeta],
     first (a shard the index holds counts as done while its flag file exists: the flag's own
     checksum is ``validate``'s to check). Costs one directory listing of the flags, one read
     per index block, a read of the last bytes of each candidate's table chunk (is it the one
-    indexed?), and one read (flag and chunk) per shard the index lacks."""
+    indexed?) or, when the index is current (:func:`~demseis.datasets.index.index_current`),
+    of one per index block, and one read (flag and chunk) per shard the index lacks."""
     s = layout.samples_per_shard
     candidates = flag_files(path, layout.n_shards)
-    indexed = indexed_rows(path, members, candidates, s)
+    indexed = indexed_rows(path, members, candidates, s, current=index_current(path))
     rest = np.array([k for k in candidates.tolist() if k not in indexed], dtype=np.int64)
     flags, _ = read_done_flags(path, layout.n_shards, shards=rest)
     shards = np.array(sorted(set(indexed) | set(np.flatnonzero(flags == 1).tolist())),

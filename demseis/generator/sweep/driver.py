@@ -408,6 +408,8 @@ def _run_sweep(
     if existed and pending:  # done flags set on shards that failed their checksums
         flagged = shard_status(out)
         summary.damaged = [int(i) for i in np.flatnonzero((flagged == 1) & (status != 1))]
+        # before any of them is written again: the index holds no entry a worker may replace
+        update_index(out, done=(status == 1), shards=pending)
     summary.phase_seconds["prepare"] = time.perf_counter() - t0
     cfg_dict = cfg.to_dict()
     bar = _progress_bar(len(pending) * cfg.samples_per_run, progress and bool(pending))
