@@ -115,12 +115,8 @@ def index_current(path: Path) -> bool:
     """True when the last full :func:`update_index` came after the last change of the table's
     directory (strictly later modification time: a filesystem with coarse times says False
     more often, never True wrongly); False when either cannot be read."""
-    try:
-        stamp = os.stat(stamp_file(path)).st_mtime_ns
-        table = os.stat(path / "params").st_mtime_ns
-    except OSError:
-        return False
-    return stamp > table
+    stamp, table = _mtime_ns(stamp_file(path)), _mtime_ns(_table_dir(path))
+    return stamp is not None and table is not None and stamp > table
 
 
 def indexed_rows(path: Path, metas: Mapping[str, ArrayMeta], shards: np.ndarray,
@@ -172,7 +168,7 @@ def update_index(path: str | Path, done: np.ndarray | None = None,
     metas = array_metas(path)
     if not all(n in metas for n in INDEX_ARRAYS) or "params" not in metas:
         return 0
-    table_time = _mtime_ns(path / "params") if shards is None else None
+    table_time = _mtime_ns(_table_dir(path)) if shards is None else None
     layout = layout_of(metas)
     s = layout.samples_per_shard
     id_meta, rec_meta, table = metas["params_index_files"], metas["params_index"], metas["params"]
@@ -217,12 +213,18 @@ def update_index(path: str | Path, done: np.ndarray | None = None,
         if dirty:
             write_block(path, rec_meta, b, blk.records, write_empty=True)
             write_block(path, id_meta, b, blk.files)
-    if table_time is not None and _mtime_ns(path / "params") == table_time:
+    if table_time is not None and _mtime_ns(_table_dir(path)) == table_time:
         _stamp_after(stamp_file(path), table_time)
     return changed
 
 
+def _table_dir(path: Path) -> Path:
+    """The directory of the parameter table's chunk files (every chunk write renames into it)."""
+    return path / "params"
+
+
 def _mtime_ns(p: Path) -> int | None:
+    """Modification time of ``p`` in ns, None when it cannot be read."""
     try:
         return os.stat(p).st_mtime_ns
     except OSError:
