@@ -604,8 +604,9 @@ STORED: tuple[Stored, ...] = (
     Stored("n_faults", "int16", "snapshot", "", "fault instances in the label"),
     Stored("max_slip_m", "float32", "snapshot", "m", "largest slip on the labelled traces"),
     Stored("dem_attempt", "int8", "run", "", "0: the DEM run as configured (always 0 for the "
-           "kinematic engine); k >= 1: it went unstable k times and was rerun stabilised, the "
-           "basement at wall_speed_m_s / 2^k"),
+           "kinematic engine); k >= 1: the earlier tries went unstable and stabilised try k "
+           "finished: tries 1-2 with the basement at wall_speed_m_s / 2^k, tries 3-5 as 0-2 "
+           "with relaxed deposits"),
 ) + tuple(
     Stored(f"fault{k}_{field}", dtype, level, unit, f"basement fault {k} (by x): {doc}; -1 if "
            "the run has fewer faults")

@@ -29,6 +29,8 @@ Sedimentation: at 1/4 and 1/2 of each interval between snapshots, wherever the t
 lies below the initial surface (``height_m``), new elements of that interval's growth layer fill
 the accommodation. They are cut from the run's own dense settled packing (so a growth layer is
 as dense as the pre-kinematic ones), get new ids and ``deposited=True``, and settle in place.
+Cut disks keep the packing's contact overlaps; ``relax_deposits=True`` shrinks them first until
+no two of them overlap (:func:`_unoverlapped`).
 """
 
 from __future__ import annotations
@@ -76,7 +78,7 @@ def surface_profile(xy: np.ndarray, radius: np.ndarray, x_edges: np.ndarray) -> 
 
 def _deposit(eng: Integrator, x_lo: float, x_hi: float, level_m: float, template_xy: np.ndarray,
              template_r: np.ndarray, template_w: float, template_h: float,
-             rng: np.random.Generator) -> int:
+             rng: np.random.Generator, relax: bool = False) -> int:
     """Fill the space between the top surface and ``level_m`` over [x_lo, x_hi] with disks.
 
     The new disks are cut from a dense settled packing (``template_*``, the run's own initial
@@ -84,6 +86,10 @@ def _deposit(eng: Integrator, x_lo: float, x_hi: float, level_m: float, template
     bottom clears the local surface (the highest disk top within one r_max either side) and
     whose centre lies below ``level_m`` is added. Starting dense matters: a loose deposit of
     cohesive disks can stay loose (columns held by cohesion). Returns the number added.
+
+    ``relax``: the cut template disks keep the settled pack's contact overlaps (lithostatic,
+    up to metres across the periodic seam); with ``relax`` they are shrunk until no two new
+    disks overlap (:func:`_unoverlapped`) before they are checked against the existing ones.
     """
     rmax = float(template_r.max())
     gap = 0.1 * float(template_r.min())
@@ -128,6 +134,12 @@ def _deposit(eng: Integrator, x_lo: float, x_hi: float, level_m: float, template
     keep = y - r > floor[col] + gap
     if not keep.any():
         return 0
+    if relax:
+        r = r.copy()
+        r[keep], kept = _unoverlapped(np.c_[x[keep], y[keep]], r[keep], float(template_r.min()))
+        keep[keep] = kept
+        if not keep.any():
+            return 0
     # The column floor is a cut, not a guarantee: next to a scarp an existing disk whose centre
     # is up to r + r_max away sideways can still reach the new disk. An overlap of metres is a
     # force of ~1e11 N that blows the run up, so check every candidate against its neighbours.
@@ -136,6 +148,35 @@ def _deposit(eng: Integrator, x_lo: float, x_hi: float, level_m: float, template
         return 0
     eng.add_elements(np.c_[x[keep], y[keep]], r[keep])
     return int(keep.sum())
+
+
+def _unoverlapped(xy: np.ndarray, r: np.ndarray, r_min: float) -> tuple[np.ndarray, np.ndarray]:
+    """Radii at which no two of the disks ``xy, r`` overlap, and which disks to keep.
+
+    Every overlapping pair gives each of its disks half the overlap to lose, and a disk loses the
+    largest half it is given: then for any pair r_i' + r_j' <= r_i + r_j - overlap_ij = d_ij.
+    A disk that would fall below ``r_min`` (the grain distribution's smallest, which sets the
+    time step) is dropped instead; dropping only removes overlaps.
+
+    Returns
+    -------
+    (m,) float64 radii; (m,) bool kept.
+    """
+    # lazy: see _clear_of
+    from scipy.spatial import cKDTree
+
+    if r.size < 2:
+        return r.copy(), np.ones(r.size, dtype=bool)
+    pairs = cKDTree(xy).query_pairs(2.0 * float(r.max()), output_type="ndarray")
+    loss = np.zeros(r.size)
+    if pairs.size:
+        i, j = pairs[:, 0], pairs[:, 1]
+        dxy = xy[i] - xy[j]
+        half = 0.5 * (r[i] + r[j] - np.sqrt(dxy[:, 0] * dxy[:, 0] + dxy[:, 1] * dxy[:, 1]))
+        np.maximum.at(loss, i, half)
+        np.maximum.at(loss, j, half)
+    out = r - loss
+    return out, out >= r_min
 
 
 def _clear_of(pos: np.ndarray, radius: np.ndarray, new_xy: np.ndarray, new_r: np.ndarray,
@@ -308,7 +349,7 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
              settle_steps: int | None = None,
              erosion_level_m: float | None = None,
              layer_materials: Sequence[Material] | None = None,
-             base_stretch: float = 0.0) -> list[Snapshot]:
+             base_stretch: float = 0.0, relax_deposits: bool = False) -> list[Snapshot]:
     """Fault ``asm`` by moving its basement blocks (see the module docstring).
 
     Parameters
@@ -342,6 +383,10 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
         ``base_stretch * width``), on top of their block's motion; side walls and fault faces
         translate with the base point they stand on. The frictional pieces drag the cover.
         ``FaultSystem((), structure="none")`` is a basement without faults: only the stretch.
+    relax_deposits : shrink the disks of every deposit until none of them overlap (they are cut
+        from the settled pack, whose contacts hold its lithostatic overlaps: 0.1-2.3 m, whose
+        elastic energy is released where the deposit has no overburden). Off by default: it
+        changes the growth layers of every run with sedimentation.
 
     Returns
     -------
@@ -531,7 +576,7 @@ def simulate(asm: Assembly, fault: NormalFault | FaultSystem, material: Material
                 n_before = eng.n
                 added = _deposit(eng, side_x(False, applied, applied_end),
                                  side_x(True, applied, applied_end), H,
-                                 xy0, asm.radius, W, H, rng)
+                                 xy0, asm.radius, W, H, rng, relax=relax_deposits)
                 if added:
                     ids = np.concatenate([ids, np.arange(next_id, next_id + added)])
                     next_id += added

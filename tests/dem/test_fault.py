@@ -127,3 +127,32 @@ def test_instability_names_its_cause(pack, cause):
         match = "left the box"
     with pytest.raises(SimulationError, match=match):
         eng.run(500)
+
+
+def test_relaxed_deposits_add_disks_that_overlap_nothing(pack, run, monkeypatch):
+    """simulate(relax_deposits=True): every deposit, as it is added, overlaps neither itself
+    nor the assembly; the run still deposits growth layers, and its pre-kinematic elements
+    start where the default run's do."""
+    from demseis.dem.integrator import Integrator
+
+    added = []
+    real = Integrator.add_elements
+
+    def spy(self, xy, r):
+        xy, r = np.asarray(xy), np.asarray(r)
+        d = np.hypot(xy[:, None, 0] - self.pos[None, :self.n, 0],
+                     xy[:, None, 1] - self.pos[None, :self.n, 1])
+        old = float((r[:, None] + self.radius[None, :self.n] - d).max())
+        dd = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
+        new = (r[:, None] + r[None, :] - dd)[np.triu_indices(r.size, 1)]
+        added.append((r.size, old, float(new.max()) if new.size else -np.inf))
+        return real(self, xy, r)
+
+    monkeypatch.setattr(Integrator, "add_elements", spy)
+    asm = build_assembly(W, H, n_layers=5, pack=pack)
+    snaps = simulate(asm, NormalFault(x_m=500.0, throw_m=100.0), Material(), n_snapshots=4,
+                     rng=np.random.default_rng(1), relax_deposits=True)
+    assert added and sum(n for n, _, _ in added) == snaps[-1].deposited.sum()
+    assert max(old for _, old, _ in added) <= 0.0
+    assert max(new for _, _, new in added) <= 1e-9
+    np.testing.assert_array_equal(snaps[0].xy, run[1][0].xy)

@@ -53,9 +53,13 @@ DRY_RUN_SETTLE_S_PER_ELEMENT = 1.4e-3
 DRY_RUN_PACKING = 0.86
 #: environment variable naming the pack library's directory (:func:`pack_cache_dir`)
 PACK_CACHE_ENV = "DEMSEIS_PACK_CACHE"
-#: reruns of a run that went unstable; try k runs the basement at ``wall_speed_m_s / 2**k``
-#: (closer to quasi-static; the tries after the first take 2, 4, ... times the steps)
-STABILISED_TRIES = 2
+#: the tries of a DEM run, in order, each ``(divisor of wall_speed_m_s, relaxed deposits)``:
+#: try 0 is the run as configured; tries 1-2 run the basement at half and a quarter of the wall
+#: speed (closer to quasi-static; 2 and 4 times the steps); tries 3-5 repeat 0-2 with relaxed
+#: deposits (``simulate(relax_deposits=True)``: no deposit carries its template's overlaps), and
+#: are made only with sedimentation. A run stores the index of the try that finished.
+TRIES: tuple[tuple[int, bool], ...] = ((1, False), (2, False), (4, False),
+                                       (1, True), (2, True), (4, True))
 
 
 class DemEngine:
@@ -117,9 +121,9 @@ class DemEngine:
         """Build the assembly of run ``spec.run`` and fault it.
 
         A run that goes unstable (:class:`~demseis.errors.SimulationError`) is run again from
-        the same assembly and seeds with the basement at half the wall speed, up to
-        :data:`STABILISED_TRIES` times (try k: ``wall_speed_m_s / 2**k``); the try that
-        finished is stored as ``dem_attempt``. Only when every try goes unstable is the run's
+        the same assembly and seeds, try by try (:data:`TRIES`: a slower basement, then relaxed
+        deposits); the try that finished is stored as ``dem_attempt``. A try slower than the
+        slowest declared wall speed is not made. Only when every try goes unstable is the run's
         error raised, naming each try's cause.
         """
         p = spec.params
@@ -149,12 +153,14 @@ class DemEngine:
         uplift = stretch < 0 or (not isinstance(fault, NormalFault) and any(
             f.kind != "normal" for f in fault.faults))
         causes = []
-        for attempt in range(STABILISED_TRIES + 1):
-            speed = fault.speed_m_s / 2**attempt
+        for attempt, (divisor, relax) in enumerate(TRIES):
+            if relax and not cfg.model.sedimentation:
+                break                      # without deposits these tries repeat the first ones
+            speed = fault.speed_m_s / divisor
             if speed < PARAMS["wall_speed_m_s"].lo:
-                causes.append(f"no {_try_name(attempt, speed)}: below the slowest wall speed "
-                              f"{PARAMS['wall_speed_m_s'].lo:g} m/s")
-                break
+                causes.append(f"no {_try_name(attempt, speed, relax)}: below the slowest wall "
+                              f"speed {PARAMS['wall_speed_m_s'].lo:g} m/s")
+                continue
             try_rng = copy.deepcopy(rng)   # every try deposits the same sediment draws
             try:
                 snaps = simulate(asm, dataclasses.replace(fault, speed_m_s=speed), material,
@@ -162,9 +168,10 @@ class DemEngine:
                                  sedimentation=cfg.model.sedimentation, rng=try_rng,
                                  progress=progress,
                                  erosion_level_m=cfg.model.height_m if uplift else None,
-                                 layer_materials=layers, base_stretch=stretch)
+                                 layer_materials=layers, base_stretch=stretch,
+                                 relax_deposits=relax)
             except SimulationError as exc:
-                causes.append(f"{_try_name(attempt, speed)}: {exc}")
+                causes.append(f"{_try_name(attempt, speed, relax)}: {exc}")
                 continue
             info = RunInfo(info.system, {**info.values, "dem_attempt": attempt})
             return EngineRun(spec=spec, info=info, snapshots=tuple(snaps))
@@ -263,11 +270,12 @@ def run_pack(cfg: Config, run: int, cache_dir: str | os.PathLike | None = None) 
                        cache_dir=pack_cache_dir() if cache_dir is None else cache_dir)
 
 
-def _try_name(attempt: int, speed_m_s: float) -> str:
+def _try_name(attempt: int, speed_m_s: float, relax: bool = False) -> str:
     """How try ``attempt`` of a run is named in its error."""
     if attempt == 0:
         return f"as configured ({speed_m_s:g} m/s)"
-    return f"stabilised try {attempt} (wall speed {speed_m_s:g} m/s)"
+    return (f"stabilised try {attempt} (wall speed {speed_m_s:g} m/s"
+            + (", relaxed deposits)" if relax else ")"))
 
 
 def dem_strata(cfg: Config, run: EngineRun, snaps: Sequence[Snapshot], props: LayerProperties,

@@ -53,7 +53,7 @@ class SweepSummary:
     #: runs written now whose last snapshot has no fault pixel (the DEM made no fault)
     no_fault: list[int] = field(default_factory=list)
     #: runs written now that went unstable and finished on a stabilised try: run -> its
-    #: ``dem_attempt`` (demseis.generator.engines.dem.STABILISED_TRIES)
+    #: ``dem_attempt`` (demseis.generator.engines.dem.TRIES)
     stabilised: dict[int, int] = field(default_factory=dict)
     #: runs marked done whose shard failed its checksums, so the sweep computes them again
     damaged: list[int] = field(default_factory=list)
@@ -95,7 +95,7 @@ class SweepSummary:
                        "last snapshot): " + ", ".join(str(r) for r in sorted(self.no_fault)))
         if self.stabilised:
             out.append(f"{len(self.stabilised)} run(s) went unstable and finished on a stabilised "
-                       "try (slower basement; stored as dem_attempt): "
+                       "try (slower basement or relaxed deposits; stored as dem_attempt): "
                        + ", ".join(f"{r} (try {a})" for r, a in sorted(self.stabilised.items())))
         for shard, err in sorted(self.failed.items()):
             out.append(f"  run {shard} failed: {err}")
