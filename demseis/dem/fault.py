@@ -92,7 +92,8 @@ def _deposit(eng: Integrator, x_lo: float, x_hi: float, level_m: float, template
     disks overlap (:func:`_unoverlapped`) before they are checked against the existing ones.
     """
     rmax = float(template_r.max())
-    gap = 0.1 * float(template_r.min())
+    rmin = float(template_r.min())
+    gap = 0.1 * rmin
     ncol = max(int(np.ceil((x_hi - x_lo) / (0.5 * rmax))), 1)
     edges = np.linspace(x_lo, x_hi, ncol + 1)
     top = surface_profile(eng.pos, eng.radius, edges)
@@ -107,7 +108,7 @@ def _deposit(eng: Integrator, x_lo: float, x_hi: float, level_m: float, template
         floor[:-sft] = np.maximum(floor[:-sft], top[sft:])
     floor[~np.isfinite(floor)] = np.min(top[finite])
     lowest = float(floor.min())
-    if level_m - lowest < 2 * float(template_r.min()):
+    if level_m - lowest < 2 * rmin:
         return 0
     # template window: interior of the pack (away from its base and surface)
     depth = level_m - lowest + 2 * rmax
@@ -136,7 +137,7 @@ def _deposit(eng: Integrator, x_lo: float, x_hi: float, level_m: float, template
         return 0
     if relax:
         r = r.copy()
-        r[keep], kept = _unoverlapped(np.c_[x[keep], y[keep]], r[keep], float(template_r.min()))
+        r[keep], kept = _unoverlapped(np.c_[x[keep], y[keep]], r[keep], rmin)
         keep[keep] = kept
         if not keep.any():
             return 0

@@ -16,6 +16,8 @@ import pytest
 from demseis.dem import settle_pack
 from demseis.dem.fault import _deposit, _unoverlapped
 
+from ._helpers import overlaps, pair_overlaps
+
 
 class _Sink:
     """The part of Integrator that _deposit uses."""
@@ -50,16 +52,8 @@ def test_deposit_clears_bumps_on_the_surface(pack, seed):
     sink = _Sink(xy, r)
     added = _deposit(sink, 0.0, 1000.0, 460.0, pack.xy, pack.radius, 1000.0, 400.0, rng)
     assert added == sink.added_r.size > 0
-    d = np.hypot(sink.added_xy[:, None, 0] - xy[None, :, 0], sink.added_xy[:, None, 1] - xy[None, :, 1])
-    overlap = (sink.added_r[:, None] + r[None, :]) - d
+    overlap = overlaps(sink.added_xy, sink.added_r, xy, r)
     assert overlap.max() <= 0.0, f"a deposit overlaps an old disk by {overlap.max():.2f} m"
-
-
-def _pair_overlaps(xy: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Every pair's overlap (m), by brute force over all pairs (i < j)."""
-    d = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
-    ov = r[:, None] + r[None, :] - d
-    return ov[np.triu_indices(r.size, 1)]
 
 
 def test_unoverlapped_against_a_pairwise_reference():
@@ -68,12 +62,12 @@ def test_unoverlapped_against_a_pairwise_reference():
     its pairs (computed here pair by pair)."""
     pack = settle_pack(600.0, 400.0, rng=5)
     xy, r = pack.xy, pack.radius
-    before = _pair_overlaps(xy, r)
+    before = pair_overlaps(xy, r)
     assert before.max() > 0.1                      # the pack does hold overlaps to remove
     r_min = float(r.min())
     out, kept = _unoverlapped(xy, r, r_min)
     assert kept.any() and out[kept].min() >= r_min
-    assert _pair_overlaps(xy[kept], out[kept]).max() <= 1e-9
+    assert pair_overlaps(xy[kept], out[kept]).max() <= 1e-9
     n = r.size
     for i in range(0, n, max(n // 40, 1)):        # the slow obvious loss of 40 disks
         half = [0.5 * (r[i] + r[j] - np.hypot(*(xy[i] - xy[j]))) for j in range(n) if j != i]
@@ -96,12 +90,11 @@ def test_relaxed_deposit_overlaps_nothing(pack, seed):
     raw = _Sink(xy, r)
     assert _deposit(raw, 0.0, 2500.0, 400.0, pack.xy, pack.radius, 1000.0, 400.0,
                     np.random.default_rng(seed)) > 0
-    assert _pair_overlaps(raw.added_xy, raw.added_r).max() > 0.05
+    assert pair_overlaps(raw.added_xy, raw.added_r).max() > 0.05
     sink = _Sink(xy, r)
     added = _deposit(sink, 0.0, 2500.0, 400.0, pack.xy, pack.radius, 1000.0, 400.0, rng,
                      relax=True)
     assert added == sink.added_r.size > 0.9 * raw.added_r.size
     assert sink.added_r.min() >= pack.radius.min()
-    assert _pair_overlaps(sink.added_xy, sink.added_r).max() <= 1e-9
-    d = np.hypot(sink.added_xy[:, None, 0] - xy[None, :, 0], sink.added_xy[:, None, 1] - xy[None, :, 1])
-    assert ((sink.added_r[:, None] + r[None, :]) - d).max() <= 0.0
+    assert pair_overlaps(sink.added_xy, sink.added_r).max() <= 1e-9
+    assert overlaps(sink.added_xy, sink.added_r, xy, r).max() <= 0.0

@@ -8,6 +8,8 @@ import pytest
 from demseis.dem import Material, NormalFault, build_assembly, settle_pack, simulate
 from demseis.errors import InputError, SimulationError
 
+from ._helpers import overlaps, pair_overlaps
+
 W, H = 1000.0, 500.0
 
 
@@ -140,11 +142,8 @@ def test_relaxed_deposits_add_disks_that_overlap_nothing(pack, run, monkeypatch)
 
     def spy(self, xy, r):
         xy, r = np.asarray(xy), np.asarray(r)
-        d = np.hypot(xy[:, None, 0] - self.pos[None, :self.n, 0],
-                     xy[:, None, 1] - self.pos[None, :self.n, 1])
-        old = float((r[:, None] + self.radius[None, :self.n] - d).max())
-        dd = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
-        new = (r[:, None] + r[None, :] - dd)[np.triu_indices(r.size, 1)]
+        old = float(overlaps(xy, r, self.pos[:self.n], self.radius[:self.n]).max())
+        new = pair_overlaps(xy, r)
         added.append((r.size, old, float(new.max()) if new.size else -np.inf))
         return real(self, xy, r)
 
