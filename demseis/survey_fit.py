@@ -25,10 +25,11 @@ From the second round on, the SNR and jitter steps use the slope measured betwee
 two rounds (a secant step) where it has the expected sign and is between 1/20 and 5 times the
 model's.
 
-Each round's store draws the ranges the config is written with (so what is calibrated is
-what is written), and the knobs move their centres. The result records every round's
-measures; ``demseis realism`` on a store generated from the
-written config compares it with the section.
+Each round's store draws the narrow ranges (``spread="fit"``, :data:`SPREADS`), so that with
+that spread what is calibrated is what is written, and the knobs move their centres. With
+``spread="preset"`` the preset's spread of frequency, SNR and noise kind is written around the
+calibrated centre. The result records every round's measures; ``demseis realism`` on a store
+generated from the written config compares it with the section.
 """
 
 from __future__ import annotations
@@ -240,15 +241,71 @@ def _knobs(sweep: dict[str, Any]) -> dict[str, float]:
             "time_gain_jitter": float(sweep["time_gain_jitter"])}
 
 
-def _with_ranges(raw: dict[str, Any]) -> dict[str, Any]:
-    """The calibrated point turned into ranges centred on it: frequency +-10 %, SNR +-3 dB,
-    phase +-15 deg, time-gain jitter +-20 %, band +-0.25 octave."""
+SPREADS = ("fit", "preset")
+"""How wide the written ranges are around the calibrated centre (``fit(spread=...)``):
+
+- ``fit``: narrow, the survey's look only: frequency +-10 %, SNR +-3 dB, the fitted noise kind;
+- ``preset``: the preset's own spread moved onto the calibrated centre: its frequency range
+  scaled so that its geometric centre is the fitted frequency (the field preset's 15-60 Hz is
+  a factor of 2 either side), its SNR values shifted so that their median finite value is the
+  fitted SNR (noise-free samples stay noise-free), its noise kinds.
+
+Both keep the fitted sampling, wavelet family, phase +-15 deg, time-gain jitter +-20 %,
+clipping and display quantisation. The centre is calibrated with the narrow spread either way:
+``demseis realism`` measures only a store's noise-free samples where it has any (the preset's
+SNR values include them), so a spread store's measures do not see the SNR."""
+
+
+def _geo_centre(values: Sequence[float]) -> float:
+    v = np.asarray(values, dtype=np.float64)
+    return float(np.sqrt(v.min() * v.max()))
+
+
+def _preset_spread(sweep: dict[str, Any], f: float, snr: float, preset_sweep: dict[str, Any],
+                   nyquist: float) -> None:
+    """Set the frequency, SNR and noise kind of ``sweep`` (in place) to ``preset_sweep``'s
+    distributions moved onto the calibrated ``f`` and ``snr`` (:data:`SPREADS`); where the
+    preset gives one number, ``sweep`` keeps what it has."""
+    top = 0.45 * nyquist
+    pf = preset_sweep.get("freq_hz")
+    if isinstance(pf, dict) and pf.get("dist") == "uniform":
+        k = f / _geo_centre([pf["low"], pf["high"]])
+        hi = round(min(k * float(pf["high"]), top), 3)
+        sweep["freq_hz"] = {"dist": "uniform", "low": round(min(k * float(pf["low"]), hi), 3),
+                            "high": hi}
+    elif isinstance(pf, dict) and pf.get("dist") == "choice":
+        k = f / _geo_centre(pf["values"])
+        sweep["freq_hz"] = {"dist": "choice", "values": sorted(
+            {round(min(k * float(v), top), 3) for v in pf["values"]})}
+    ps = preset_sweep.get("snr_db")
+    if isinstance(ps, dict) and ps.get("dist") == "choice":
+        finite = [float(v) for v in ps["values"] if math.isfinite(float(v))]
+        shift = snr - float(np.median(finite)) if finite else 0.0
+        sweep["snr_db"] = {"dist": "choice", "values": [
+            round(float(v) + shift, 2) if math.isfinite(float(v)) else float(v)
+            for v in ps["values"]]}
+    elif isinstance(ps, dict) and ps.get("dist") == "uniform":
+        shift = snr - 0.5 * (float(ps["low"]) + float(ps["high"]))
+        sweep["snr_db"] = {"dist": "uniform", "low": round(float(ps["low"]) + shift, 2),
+                           "high": round(float(ps["high"]) + shift, 2)}
+    if "noise_kind" in preset_sweep:
+        sweep["noise_kind"] = preset_sweep["noise_kind"]
+
+
+def _with_ranges(raw: dict[str, Any], spread: str = "fit",
+                 preset_sweep: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The calibrated point turned into ranges centred on it (:data:`SPREADS`): frequency
+    +-10 %, SNR +-3 dB, phase +-15 deg, time-gain jitter +-20 %, band +-0.25 octave; with
+    ``spread="preset"`` the frequency, SNR and noise kind take ``preset_sweep``'s spread
+    instead."""
     sweep = raw["sweep"]
     f = float(sweep["freq_hz"])
     sweep["freq_hz"] = {"dist": "uniform", "low": round(0.9 * f, 3), "high": round(1.1 * f, 3)}
     snr = float(sweep["snr_db"])
     sweep["snr_db"] = {"dist": "uniform", "low": round(max(snr - 3.0, -40.0), 2),
                        "high": round(snr + 3.0, 2)}
+    if spread == "preset" and preset_sweep is not None:
+        _preset_spread(sweep, f, snr, preset_sweep, 0.5 / float(raw["output"]["dt_s"]))
     ph = float(sweep["wavelet_phase_deg"])
     sweep["wavelet_phase_deg"] = {"dist": "uniform", "low": round(max(ph - 15.0, -180.0), 1),
                                   "high": round(min(ph + 15.0, 180.0), 1)}
@@ -301,7 +358,7 @@ def calibrate(raw: dict[str, Any], target: dict[str, float], rounds: int, work: 
     over ``rounds`` rounds (module docstring); the rounds' records. Each round generates the
     config as it would be written (its runs, renders and seed) with the kinematic engine, so
     the last round's measures are those of ``demseis generate`` on the written config with
-    ``[model] engine = "kinematic"``."""
+    ``[model] engine = "kinematic"`` and the narrow spread (``spread="fit"``)."""
     records = []
     for k in range(rounds + 1):
         trial = _with_ranges({sec: dict(v) if isinstance(v, dict) else v
@@ -362,7 +419,8 @@ def to_toml(raw: dict[str, Any], header: Sequence[str] = ()) -> str:
 
 def fit(sections: str | Path | Sequence[str | Path], out: str | Path | None = None, *,
         dt_s: float | None = None, trace_spacing_m: float | None = None,
-        preset: str = "field", rounds: int = 3, progress: bool = False) -> FitResult:
+        preset: str = "field", rounds: int = 3, spread: str = "fit",
+        progress: bool = False) -> FitResult:
     """Fit a config to one or more sections of a survey.
 
     Parameters
@@ -375,6 +433,9 @@ def fit(sections: str | Path | Sequence[str | Path], out: str | Path | None = No
         the headers).
     preset : the preset the config starts from (its geology, faults and model).
     rounds : calibration rounds (0: the first guess only).
+    spread : how wide the written ranges are around the calibrated centre (:data:`SPREADS`):
+        ``"fit"`` (the survey's look only) or ``"preset"`` (the preset's spread of frequency,
+        SNR and noise kind, moved onto the survey's centre).
     progress : progress bars of the calibration stores.
 
     Returns
@@ -386,6 +447,8 @@ def fit(sections: str | Path | Sequence[str | Path], out: str | Path | None = No
         raise InputError("give at least one section to fit")
     if not (isinstance(rounds, int) and 0 <= rounds <= 10):
         raise InputError(f"rounds must be an integer in [0, 10], got {rounds!r}")
+    if spread not in SPREADS:
+        raise InputError(f"spread must be one of {', '.join(SPREADS)}, got {spread!r}")
     samplings = [read_sampling(p, dt_s, trace_spacing_m) for p in paths]
     if len({s.dt_s for s in samplings}) > 1:
         raise InputError("the sections have different sample intervals "
@@ -393,15 +456,17 @@ def fit(sections: str | Path | Sequence[str | Path], out: str | Path | None = No
     measured = [measure_section(s) for s in samplings]
     target = {k: _median([m[k] for m in measured]) for k in measured[0]}
     raw = first_guess(target, samplings[0], preset)
+    preset_sweep = load_config(preset=preset).to_dict()["sweep"]
     with tempfile.TemporaryDirectory(prefix="demseis-fit-") as tmp:
         records = calibrate(raw, target, rounds, Path(tmp), progress=progress)
-    raw = _with_ranges(raw)
+    raw = _with_ranges(raw, spread, preset_sweep)
     raw["name"] = f"fit:{Path(paths[0]).name}" + (f"+{len(paths) - 1}" if len(paths) > 1 else "")
     result = FitResult(raw, [{"path": s.path, **m} for s, m in zip(samplings, measured)],
                        target, records)
     header = [f"demseis fit {' '.join(str(p) for p in paths)}",
               f"sampling: dt {samplings[0].dt_s * 1e3:g} ms, traces every "
-              f"{samplings[0].trace_spacing_m:g} m; preset {preset}; {rounds} calibration rounds",
+              f"{samplings[0].trace_spacing_m:g} m; preset {preset}, spread {spread}; {rounds} "
+              "calibration rounds",
               ""] + result.table().splitlines() + [""] + [
         f"round {r['round']}: " + ", ".join(f"{k} {v:.4g}" for k, v in r["knobs"].items())
         + " -> " + ", ".join(f"{k} {v:.3g}" for k, v in r["measures"].items())

@@ -15,7 +15,7 @@ import demseis
 from demseis.errors import InputError
 from demseis.generator.config.settings import load_config, parse_config
 from demseis.seismic.segy import write_segy
-from demseis.survey_fit import MEASURES, fit, read_sampling, to_toml
+from demseis.survey_fit import MEASURES, SPREADS, _with_ranges, fit, read_sampling, to_toml
 from tests._helpers import ROOT
 
 
@@ -49,6 +49,68 @@ def test_the_toml_reads_back_as_the_config():
               for k, v in raw.items() if v is not None}
     assert back == expect
     assert load_config_from_text(text) == parse_config(raw).to_dict()   # the same config
+
+
+def _calibrated(freq_hz: float, snr_db: float, dt_s: float = 0.004) -> dict:
+    """The field preset with a calibrated point (what calibrate leaves before the ranges)."""
+    raw = load_config(preset="field").to_dict()
+    raw["output"]["dt_s"] = dt_s
+    raw["sweep"].update({"freq_hz": freq_hz, "snr_db": snr_db, "wavelet_phase_deg": 10.0,
+                         "time_gain_jitter": 0.0, "noise_kind": "band"})
+    return raw
+
+
+def test_the_narrow_spread_is_the_fitted_look_only():
+    sweep = _with_ranges(_calibrated(36.0, 14.0))["sweep"]
+    assert sweep["freq_hz"] == {"dist": "uniform", "low": 32.4, "high": 39.6}
+    assert sweep["snr_db"] == {"dist": "uniform", "low": 11.0, "high": 17.0}
+    assert sweep["noise_kind"] == "band"
+    assert sweep["wavelet_phase_deg"] == {"dist": "uniform", "low": -5.0, "high": 25.0}
+
+
+def test_the_preset_spread_is_the_presets_moved_onto_the_fitted_centre():
+    preset = load_config(preset="field").to_dict()["sweep"]          # 15-60 Hz, SNR inf..5 dB
+    raw = _with_ranges(_calibrated(24.0, 12.0, dt_s=0.002), "preset", preset)
+    sweep = raw["sweep"]
+    lo, hi = sweep["freq_hz"]["low"], sweep["freq_hz"]["high"]
+    assert math.sqrt(lo * hi) == pytest.approx(24.0)                      # centred (geometric)
+    assert hi / lo == pytest.approx(preset["freq_hz"]["high"] / preset["freq_hz"]["low"])
+    snr = sweep["snr_db"]["values"]
+    finite = [v for v in snr if math.isfinite(v)]
+    assert np.median(finite) == pytest.approx(12.0)                       # centred
+    preset_snr = [float(v) for v in preset["snr_db"]["values"]]           # "inf" is a string
+    assert np.ptp(finite) == pytest.approx(np.ptp([v for v in preset_snr if math.isfinite(v)]))
+    assert snr.count(math.inf) == preset_snr.count(math.inf) == 1          # noise-free stays
+    assert sweep["noise_kind"] == preset["noise_kind"]                     # white and band
+    assert sweep["wavelet_phase_deg"] == {"dist": "uniform", "low": -5.0, "high": 25.0}
+    parse_config(raw)                                                      # a valid config
+    # at 4 ms the top of 18-72 Hz passes 0.45 Nyquist (56.25 Hz) and is cut there
+    top = _with_ranges(_calibrated(36.0, 12.0), "preset", preset)["sweep"]["freq_hz"]
+    assert top == {"dist": "uniform", "low": 18.0, "high": 56.25}
+    # a preset value that is one number keeps the narrow range
+    one = dict(preset, freq_hz=30.0, snr_db=10.0)
+    sweep = _with_ranges(_calibrated(36.0, 14.0), "preset", one)["sweep"]
+    assert sweep["freq_hz"]["low"] == 32.4 and sweep["snr_db"]["low"] == 11.0
+
+
+def test_an_unknown_spread_is_refused_and_the_cli_offers_every_spread(tmp_path):
+    with pytest.raises(InputError, match="spread must be one of fit, preset"):
+        fit(tmp_path / "none.sgy", spread="wide")
+    from demseis.cli import build_parser
+
+    action = next(a for a in build_parser()._subparsers._group_actions[0].choices["fit"]._actions
+                  if a.dest == "spread")
+    assert tuple(action.choices) == SPREADS
+
+
+def test_the_sampling_and_spread_flags_of_generate_go_with_like(tmp_path, capsys):
+    from demseis.cli import main
+
+    assert main(["generate", "--preset", "tiny", "--out", str(tmp_path / "s.zarr"),
+                 "--spread", "preset"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--spread go with --like" in err
+    assert not (tmp_path / "s.zarr").exists()
 
 
 def load_config_from_text(text: str) -> dict:

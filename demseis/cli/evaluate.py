@@ -124,4 +124,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="the preset whose geology and faults the config keeps (default field)")
     f.add_argument("--rounds", type=nonneg_int, default=3,
                    help="calibration rounds on small kinematic stores (default 3; 0 = none)")
+    f.add_argument("--spread", choices=("fit", "preset"), default="fit",
+                   help="ranges around the fitted centre: fit = the survey's look only "
+                   "(frequency +-10%%, SNR +-3 dB; default), preset = the preset's spread of "
+                   "frequency, SNR and noise kind moved onto the survey's centre")
     f.set_defaults(func="evaluate:cmd_fit")

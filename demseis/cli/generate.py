@@ -37,6 +37,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --like: the sample interval where the headers do not give it")
     p.add_argument("--trace-spacing-m", type=float, default=None, metavar="M",
                    help="with --like: the trace spacing where the headers do not give it")
+    p.add_argument("--spread", choices=("fit", "preset"), default=None,
+                   help="with --like: ranges around the fitted centre (as demseis fit --spread; "
+                        "default fit)")
     p.set_defaults(func="generate:cmd_generate")
 
     p = sub.add_parser("render", help="re-render a store's particle snapshots at new frequencies / SNRs")

@@ -85,7 +85,8 @@ def cmd_baseline(args: argparse.Namespace) -> int:
 def cmd_fit(args: argparse.Namespace) -> int:
     dt = None if args.dt_ms is None else args.dt_ms / 1000.0
     result = fit(args.sections, args.out, dt_s=dt, trace_spacing_m=args.trace_spacing_m,
-                 preset=args.preset, rounds=args.rounds, progress=False)
+                 preset=args.preset, rounds=args.rounds, spread=args.spread,
+                 progress=False)
     print(result.table())
     print(f"wrote {args.out}: demseis generate {args.out} --out STORE.zarr")
     return 0

@@ -27,11 +27,11 @@ def cmd_generate(args: argparse.Namespace) -> int:
         dt = None if args.dt_ms is None else args.dt_ms / 1000.0
         print(f"fitting the config to {', '.join(args.like)} (demseis fit) ...", file=sys.stderr)
         fitted = fit(args.like, None, dt_s=dt, trace_spacing_m=args.trace_spacing_m,
-                     preset=args.preset or "field")
+                     preset=args.preset or "field", spread=args.spread or "fit")
         print(fitted.table())
         cfg = parse_config(fitted.config)
-    elif args.dt_ms is not None or args.trace_spacing_m is not None:
-        raise InputError("--dt-ms and --trace-spacing-m go with --like SECTION")
+    elif args.dt_ms is not None or args.trace_spacing_m is not None or args.spread is not None:
+        raise InputError("--dt-ms, --trace-spacing-m and --spread go with --like SECTION")
     else:
         cfg = load_config(args.config, preset=args.preset)
     if args.dry_run:  # what this command would compute into --out now (nothing is written)
