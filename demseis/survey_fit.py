@@ -266,30 +266,32 @@ def _geo_centre(values: Sequence[float]) -> float:
 def _preset_spread(sweep: dict[str, Any], f: float, snr: float, preset_sweep: dict[str, Any],
                    nyquist: float) -> None:
     """Set the frequency, SNR and noise kind of ``sweep`` (in place) to ``preset_sweep``'s
-    distributions moved onto the calibrated ``f`` and ``snr`` (:data:`SPREADS`); where the
-    preset gives one number, ``sweep`` keeps what it has."""
+    distributions moved onto the calibrated ``f`` and ``snr`` (:data:`SPREADS`), kept inside
+    the parameters' bounds (1 Hz to 0.45 of Nyquist, SNR at least -40 dB); where the preset
+    gives one number, ``sweep`` keeps what it has."""
     top = 0.45 * nyquist
     pf = preset_sweep.get("freq_hz")
     if isinstance(pf, dict) and pf.get("dist") == "uniform":
         k = f / _geo_centre([pf["low"], pf["high"]])
-        hi = round(min(k * float(pf["high"]), top), 3)
-        sweep["freq_hz"] = {"dist": "uniform", "low": round(min(k * float(pf["low"]), hi), 3),
-                            "high": hi}
+        hi = round(max(min(k * float(pf["high"]), top), 1.0), 3)
+        sweep["freq_hz"] = {"dist": "uniform",
+                            "low": round(min(max(k * float(pf["low"]), 1.0), hi), 3), "high": hi}
     elif isinstance(pf, dict) and pf.get("dist") == "choice":
         k = f / _geo_centre(pf["values"])
         sweep["freq_hz"] = {"dist": "choice", "values": sorted(
-            {round(min(k * float(v), top), 3) for v in pf["values"]})}
+            {round(max(min(k * float(v), top), 1.0), 3) for v in pf["values"]})}
     ps = preset_sweep.get("snr_db")
     if isinstance(ps, dict) and ps.get("dist") == "choice":
         finite = [float(v) for v in ps["values"] if math.isfinite(float(v))]
         shift = snr - float(np.median(finite)) if finite else 0.0
         sweep["snr_db"] = {"dist": "choice", "values": [
-            round(float(v) + shift, 2) if math.isfinite(float(v)) else float(v)
+            round(max(float(v) + shift, -40.0), 2) if math.isfinite(float(v)) else float(v)
             for v in ps["values"]]}
     elif isinstance(ps, dict) and ps.get("dist") == "uniform":
         shift = snr - 0.5 * (float(ps["low"]) + float(ps["high"]))
-        sweep["snr_db"] = {"dist": "uniform", "low": round(float(ps["low"]) + shift, 2),
-                           "high": round(float(ps["high"]) + shift, 2)}
+        sweep["snr_db"] = {"dist": "uniform",
+                           "low": round(max(float(ps["low"]) + shift, -40.0), 2),
+                           "high": round(max(float(ps["high"]) + shift, -40.0), 2)}
     if "noise_kind" in preset_sweep:
         sweep["noise_kind"] = preset_sweep["noise_kind"]
 

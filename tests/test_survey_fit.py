@@ -87,6 +87,10 @@ def test_the_preset_spread_is_the_presets_moved_onto_the_fitted_centre():
     # at 4 ms the top of 18-72 Hz passes 0.45 Nyquist (56.25 Hz) and is cut there
     top = _with_ranges(_calibrated(36.0, 12.0), "preset", preset)["sweep"]["freq_hz"]
     assert top == {"dist": "uniform", "low": 18.0, "high": 56.25}
+    # a low, noisy centre stays inside the parameters' bounds (1 Hz, -40 dB)
+    low = _with_ranges(_calibrated(1.5, -30.0), "preset", preset)
+    assert low["sweep"]["freq_hz"]["low"] == 1.0 and min(low["sweep"]["snr_db"]["values"]) == -40.0
+    parse_config(low)
     # a preset value that is one number keeps the narrow range
     one = dict(preset, freq_hz=30.0, snr_db=10.0)
     sweep = _with_ranges(_calibrated(36.0, 14.0), "preset", one)["sweep"]
