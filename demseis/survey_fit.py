@@ -51,6 +51,7 @@ from demseis.evaluation.realism_report import section_measures, store_measures
 from demseis.evaluation.segyfile import is_segy
 from demseis.generator.config.settings import load_config, parse_config
 from demseis.generator.sweep.driver import run_sweep
+from demseis.parameters import PARAMS
 from demseis.seismic.wavelet import Wavelet, estimate_wavelet
 
 #: the measures calibrated and compared (those of ``demseis realism``)
@@ -269,29 +270,36 @@ def _preset_spread(sweep: dict[str, Any], f: float, snr: float, preset_sweep: di
     distributions moved onto the calibrated ``f`` and ``snr`` (:data:`SPREADS`), kept inside
     the parameters' bounds (1 Hz to 0.45 of Nyquist, SNR at least -40 dB); where the preset
     gives one number, ``sweep`` keeps what it has."""
+    f_lo, snr_lo = PARAMS["freq_hz"].lo, PARAMS["snr_db"].lo
     top = 0.45 * nyquist
+
+    def freq(x: Any) -> float:
+        return round(max(min(float(x), top), f_lo), 3)
+
+    def noise(x: Any) -> float:
+        return round(max(float(x), snr_lo), 2)
+
     pf = preset_sweep.get("freq_hz")
     if isinstance(pf, dict) and pf.get("dist") == "uniform":
         k = f / _geo_centre([pf["low"], pf["high"]])
-        hi = round(max(min(k * float(pf["high"]), top), 1.0), 3)
-        sweep["freq_hz"] = {"dist": "uniform",
-                            "low": round(min(max(k * float(pf["low"]), 1.0), hi), 3), "high": hi}
+        hi = freq(k * float(pf["high"]))
+        sweep["freq_hz"] = {"dist": "uniform", "low": min(freq(k * float(pf["low"])), hi),
+                            "high": hi}
     elif isinstance(pf, dict) and pf.get("dist") == "choice":
         k = f / _geo_centre(pf["values"])
-        sweep["freq_hz"] = {"dist": "choice", "values": sorted(
-            {round(max(min(k * float(v), top), 1.0), 3) for v in pf["values"]})}
+        sweep["freq_hz"] = {"dist": "choice",
+                            "values": sorted({freq(k * float(v)) for v in pf["values"]})}
     ps = preset_sweep.get("snr_db")
     if isinstance(ps, dict) and ps.get("dist") == "choice":
-        finite = [float(v) for v in ps["values"] if math.isfinite(float(v))]
+        values = [float(v) for v in ps["values"]]                 # "inf" is a string there
+        finite = [v for v in values if math.isfinite(v)]
         shift = snr - float(np.median(finite)) if finite else 0.0
-        sweep["snr_db"] = {"dist": "choice", "values": [
-            round(max(float(v) + shift, -40.0), 2) if math.isfinite(float(v)) else float(v)
-            for v in ps["values"]]}
+        sweep["snr_db"] = {"dist": "choice",
+                           "values": [noise(v + shift) if math.isfinite(v) else v for v in values]}
     elif isinstance(ps, dict) and ps.get("dist") == "uniform":
         shift = snr - 0.5 * (float(ps["low"]) + float(ps["high"]))
-        sweep["snr_db"] = {"dist": "uniform",
-                           "low": round(max(float(ps["low"]) + shift, -40.0), 2),
-                           "high": round(max(float(ps["high"]) + shift, -40.0), 2)}
+        sweep["snr_db"] = {"dist": "uniform", "low": noise(float(ps["low"]) + shift),
+                           "high": noise(float(ps["high"]) + shift)}
     if "noise_kind" in preset_sweep:
         sweep["noise_kind"] = preset_sweep["noise_kind"]
 

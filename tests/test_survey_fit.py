@@ -102,9 +102,10 @@ def test_an_unknown_spread_is_refused_and_the_cli_offers_every_spread(tmp_path):
         fit(tmp_path / "none.sgy", spread="wide")
     from demseis.cli import build_parser
 
-    action = next(a for a in build_parser()._subparsers._group_actions[0].choices["fit"]._actions
-                  if a.dest == "spread")
-    assert tuple(action.choices) == SPREADS
+    commands = build_parser()._subparsers._group_actions[0].choices
+    for command in ("fit", "generate"):                       # generate --like ... --spread
+        action = next(a for a in commands[command]._actions if a.dest == "spread")
+        assert tuple(action.choices) == SPREADS, command
 
 
 def test_the_sampling_and_spread_flags_of_generate_go_with_like(tmp_path, capsys):
