@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from demseis.errors import ConfigError, InputError
+from demseis.generator.config.sampling import run_params
 from demseis.generator.config.settings import load_config
-from demseis.parameters import BED_FIELDS
+from demseis.generator.engines.runsetup import bed_model_of
 from demseis.seismic import (BedModel, LayerProperties, PropertyModel, draw_layer_properties,
                              draw_strata, strata_properties)
 from demseis.seismic.strata import undulation_bound
@@ -123,8 +124,7 @@ def test_field_preset_beds_put_no_static_jumps_between_traces():
     sample of random offset between traces, which a network trained on DEM runs paints as
     faults: docs/benchmarks.md); the `field` preset's beds, constant along their length,
     shift none."""
-    sweep = load_config(preset="field").to_dict()["sweep"]
-    field = BedModel(**{k: sweep[k] for k in BED_FIELDS if k in sweep})
+    field = bed_model_of(run_params(load_config(preset="field"), 0))    # as a run draws it
     for seed in (0, 1):
         jumps = np.abs(np.diff(_two_way_times(BedModel(), 600.0, seed)))
         assert 0.5e-3 < np.percentile(jumps, 90) < 3e-3, seed
