@@ -184,3 +184,46 @@ def test_ctrl_c_at_20_moments_is_quick_and_clean(tmp_path, n_runs, engine, lates
         assert "leaked" not in err and "Traceback" not in err
     assert not list(tmp.glob("pymp-*")), list(tmp.iterdir())
     assert _shm_files() <= shm, _shm_files() - shm
+
+
+_SLOW_SERVER_START = """\
+import multiprocessing.forkserver as fs, pathlib, sys, time
+start, where, marker = fs.ensure_running, sys.argv[1], pathlib.Path(sys.argv[2])
+def slow():  # the moments around the forkserver's start, widened to seconds
+    if where == "before":
+        marker.touch(); time.sleep(2.0); start()
+    else:
+        start(); marker.touch(); time.sleep(2.0)
+fs.ensure_running = slow
+from demseis.cli import main
+raise SystemExit(main(sys.argv[3:]))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("where", ["before", "after"])
+def test_ctrl_c_while_the_forkserver_starts_is_not_lost(tmp_path, where):
+    """A Ctrl-C while the driver starts the workers' forkserver (just before it is forked, or
+    while it imports) interrupts the sweep: exit 130 with the one line. A driver that ignored
+    SIGINT for that moment would lose such a Ctrl-C, and a 100,000-run sweep would run on (a
+    rare "did not exit within 120 s" of the test above)."""
+    import os
+    import signal
+    import time
+
+    from tests.faults._helpers import _default_sigint
+
+    cfg = tmp_path / "big.toml"
+    cfg.write_text('[sweep]\nn_runs = 100000\n[model]\nengine = "kinematic"\n')
+    script = tmp_path / "driver.py"
+    script.write_text(_SLOW_SERVER_START)
+    marker = tmp_path / "forking"
+    env = {k: v for k, v in os.environ.items() if k != "DEMSEIS_WORKER_START"}
+    proc = subprocess.Popen([sys.executable, str(script), where, str(marker), "generate", str(cfg),
+                             "--preset", "tiny", "--out", str(tmp_path / "big.zarr"),
+                             "--workers", "2", "--quiet"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True, cwd=ROOT,
+                            env=env, preexec_fn=_default_sigint)
+    assert wait_for(marker.exists, proc=proc), proc.communicate()[1][-2000:]
+    time.sleep(0.5)
+    _assert_clean_interrupt(*interrupt(proc, signal.SIGINT))

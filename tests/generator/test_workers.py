@@ -5,13 +5,15 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import re
+import signal
 import subprocess
 import sys
 
 import pytest
 
 from demseis.errors import InputError
-from demseis.generator.sweep.workers import worker_start_method
+from demseis.generator.sweep.workers import sigint_blocked, sigint_deferred, worker_start_method
 from tests._helpers import ROOT
 from tests.generator._helpers import assert_same_bytes
 
@@ -84,3 +86,68 @@ def test_spawned_and_forked_workers_write_the_same_bytes(tiny_store, tmp_path):
                              cwd=ROOT, env=env, capture_output=True, text=True)
         assert res.returncode == 0, res.stderr[-2000:]
         assert_same_bytes(tiny_store, out)
+
+
+def _blocked_and_ignored(status: str) -> tuple[bool, bool]:
+    """Whether SIGINT is in the SigBlk and SigIgn masks of a /proc/PID/status text."""
+    bit = 1 << (signal.SIGINT - 1)
+    masks = [int(re.search(rf"{k}:\s*([0-9a-f]+)", status).group(1), 16)
+             for k in ("SigBlk", "SigIgn")]
+    return bool(masks[0] & bit), bool(masks[1] & bit)
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/status")
+                    or not hasattr(signal, "pthread_sigmask"), reason="signal masks in /proc")
+def test_a_ctrl_c_while_a_child_starts_is_held_here_and_blocked_there():
+    """The forkserver's start: a SIGINT sent to this process inside sigint_deferred +
+    sigint_blocked is raised at the block's end (not lost, as with SIG_IGN), and a process
+    started in the block starts with SIGINT blocked and not ignored (it is held pending)."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with sigint_deferred(), sigint_blocked():
+                child = subprocess.Popen(
+                    [sys.executable, "-c", "print(open('/proc/self/status').read())"],
+                    stdout=subprocess.PIPE, text=True)
+                os.kill(os.getpid(), signal.SIGINT)
+                status = child.communicate()[0]
+        assert signal.pthread_sigmask(signal.SIG_BLOCK, set()) == set()  # unblocked after it
+        assert _blocked_and_ignored(status) == (True, False)
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def test_an_ignored_sigint_stays_ignored_while_deferred():
+    """A background job ignores SIGINT: deferring it must not start catching it."""
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        with sigint_deferred():
+            assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+            os.kill(os.getpid(), signal.SIGINT)
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+@pytest.mark.skipif("forkserver" not in multiprocessing.get_all_start_methods() or
+                    not os.path.exists("/proc/self/status"), reason="forkserver, /proc")
+def test_the_forkserver_and_its_workers_ignore_sigint_with_a_plain_mask(monkeypatch):
+    """The server starts with SIGINT blocked (held pending, not acted on); its preload ignores
+    SIGINT (which discards one held) and unblocks it again; a process it forks inherits both."""
+    code = ("import multiprocessing, multiprocessing.forkserver as fs, time\n"
+            "from demseis.generator.sweep.workers import start_forkserver\n"
+            "start_forkserver()\n"
+            "print(open(f'/proc/{fs._forkserver._forkserver_pid}/status').read())  # starting\n"
+            "ctx = multiprocessing.get_context('forkserver')\n"
+            "p = ctx.Process(target=time.sleep, args=(30,))\n"
+            "p.start()  # forked once the preload is done\n"
+            "for pid in (fs._forkserver._forkserver_pid, p.pid):\n"
+            "    print(open(f'/proc/{pid}/status').read())\n"
+            "p.kill()\n")
+    monkeypatch.delenv("DEMSEIS_WORKER_START", raising=False)
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                         timeout=300)
+    assert res.returncode == 0, res.stderr[-2000:]
+    starting, server, worker = res.stdout.split("Name:")[1:]
+    assert any(_blocked_and_ignored(starting))  # (True, False) until its preload, then ignored
+    assert _blocked_and_ignored(server) == (False, True)
+    assert _blocked_and_ignored(worker) == (False, True)

@@ -8,6 +8,15 @@ See :mod:`demseis.generator.sweep.workers` for why and what it saves.
 
 from __future__ import annotations
 
+import signal
+
+# Ctrl-C is the driver's. This process started with SIGINT blocked
+# (demseis.generator.sweep.workers.start_forkserver): ignoring it discards one sent meanwhile,
+# and the workers forked from here inherit both.
+signal.signal(signal.SIGINT, signal.SIG_IGN)
+if hasattr(signal, "pthread_sigmask"):
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
 import distributed.nanny  # noqa: F401  (the worker process's own imports)
 import distributed.worker  # noqa: F401
 

@@ -28,6 +28,7 @@ from __future__ import annotations
 import contextlib
 import multiprocessing
 import multiprocessing.forkserver
+import multiprocessing.resource_tracker
 import os
 import signal
 import sys
@@ -71,17 +72,25 @@ def set_worker_env() -> dict[str, str]:
 def start_forkserver() -> None:
     """Start the forkserver with the sweep's preload, unless it runs already; no-op with spawn.
 
-    It is started with SIGINT ignored, so that it and every worker it forks ignore Ctrl-C from
-    their first instruction (the driver handles it and shuts the cluster down). It serves every
-    later sweep of this process and exits with it; its preloaded modules are those of its start.
+    Ctrl-C is the driver's (it shuts the cluster down): the server starts with SIGINT blocked
+    (:func:`sigint_blocked`), ignores it from the first line of its preload on, and every worker
+    it forks inherits that. A Ctrl-C that comes while the server starts is held in this process
+    and raised once the server runs (:func:`sigint_deferred`); ignoring SIGINT here instead
+    would lose it, and the sweep would run on. The server serves every later sweep of this
+    process and exits with it; its preloaded modules are those of its start.
     """
     if worker_start_method() != "forkserver":
         return
     set_worker_env()
     multiprocessing.get_context("forkserver").set_forkserver_preload(
         ["demseis.generator.sweep._forkserver_preload"])
-    with sigint_ignored(), main_module_hidden():
-        multiprocessing.forkserver.ensure_running()
+    with sigint_deferred(), main_module_hidden():
+        # the server's start starts multiprocessing's resource tracker first, unless it runs,
+        # and that start unblocks SIGINT in this thread when it is done: started here, outside
+        # the block, so that the server starts with SIGINT blocked
+        multiprocessing.resource_tracker.ensure_running()
+        with sigint_blocked():
+            multiprocessing.forkserver.ensure_running()
 
 
 _ABSENT = object()
@@ -131,10 +140,30 @@ def sigint_ignored() -> Iterator[None]:
 
 
 @contextlib.contextmanager
+def sigint_blocked() -> Iterator[None]:
+    """SIGINT blocked in this thread's signal mask for the block. A process started meanwhile
+    (fork and exec keep the mask) holds a SIGINT sent to it pending instead of acting on it,
+    until it unblocks the signal; installing SIG_IGN first discards it
+    (:mod:`demseis.generator.sweep._forkserver_preload`). This process's handler still runs
+    (in another thread's stead, or here at the block's end): nothing is lost, unlike with
+    :func:`sigint_ignored`. A no-op where the platform has no signal masks."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+@contextlib.contextmanager
 def sigint_deferred(raises: type[KeyboardInterrupt] = KeyboardInterrupt) -> Iterator[None]:
     """Hold SIGINT in the main thread for the block; one that arrived is raised at its end (as
-    ``raises``: :class:`demseis.interrupts.Finished` where the block completes the work)."""
-    if threading.current_thread() is not threading.main_thread():
+    ``raises``: :class:`demseis.interrupts.Finished` where the block completes the work). An
+    ignored SIGINT (a background job's) stays ignored."""
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
         yield
         return
     got: list[int] = []
