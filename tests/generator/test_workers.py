@@ -151,3 +151,20 @@ def test_the_forkserver_and_its_workers_ignore_sigint_with_a_plain_mask(monkeypa
     assert any(_blocked_and_ignored(starting))  # (True, False) until its preload, then ignored
     assert _blocked_and_ignored(server) == (False, True)
     assert _blocked_and_ignored(worker) == (False, True)
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_sigmask"), reason="signal masks")
+def test_importing_the_preload_elsewhere_leaves_sigint_alone():
+    """The preload ignores SIGINT only in a process started with it blocked (the forkserver):
+    imported by a script or a test (test_docrefs imports every module), Ctrl-C still works."""
+    code = ("import signal\n"
+            "import demseis.generator.sweep._forkserver_preload as p\n"
+            "assert signal.getsignal(signal.SIGINT) is signal.default_int_handler\n"
+            "signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})\n"
+            "assert p.ignore_sigint_held_since_start()\n"
+            "assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN\n"
+            "assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, set())\n")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                         timeout=300,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    assert res.returncode == 0, res.stderr[-2000:]

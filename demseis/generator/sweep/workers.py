@@ -144,9 +144,10 @@ def sigint_blocked() -> Iterator[None]:
     """SIGINT blocked in this thread's signal mask for the block. A process started meanwhile
     (fork and exec keep the mask) holds a SIGINT sent to it pending instead of acting on it,
     until it unblocks the signal; installing SIG_IGN first discards it
-    (:mod:`demseis.generator.sweep._forkserver_preload`). This process's handler still runs
-    (in another thread's stead, or here at the block's end): nothing is lost, unlike with
-    :func:`sigint_ignored`. A no-op where the platform has no signal masks."""
+    (:mod:`demseis.generator.sweep._forkserver_preload`). This process still gets its own: the
+    signal goes to another of its threads, whose handler hands it to the main thread's, or it
+    is delivered at the block's end. Nothing is lost, unlike with :func:`sigint_ignored`. A
+    no-op where the platform has no signal masks."""
     if not hasattr(signal, "pthread_sigmask"):
         yield
         return
