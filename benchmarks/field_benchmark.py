@@ -498,8 +498,15 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument("--results", default="field_benchmark.json", help="accumulated results")
     ap.add_argument("--figure", help="PNG: one seed's predictions beside the masks")
     ap.add_argument("--figure-seed", type=int, help="the seed drawn (default: the first)")
+    ap.add_argument("--ignore", metavar="ARRAY[=V,V]",
+                    help="train with the pixels of this label array (with these values; "
+                         "default any non-zero) left out of the loss, in the stores that hold "
+                         "it (fault_uncertain: train_unet(ignore=))")
     args = ap.parse_args(argv)
     from demseis.errors import InputError
+    from demseis.learning.train import parse_ignore
+
+    args.ignore, args.ignore_values = parse_ignore(args.ignore)
 
     for s in args.field_scale:
         if s != "auto":
@@ -563,6 +570,8 @@ def main(argv: list[str] | None = None) -> int:
                   "base": base, "crop": args.crop, "batch": args.batch, "lr": args.lr,
                   "device": device.split(":")[0], "augment": True, "amp": cuda,
                   "test_fraction": args.test_fraction}
+        if args.ignore:  # only then in the config: the fingerprints without it stay
+            config["ignore"] = [args.ignore, args.ignore_values]
         where = None
         if name in limits:  # only then in the config: the fingerprints of full sets stay
             config["train_runs"] = limits[name]
@@ -594,7 +603,8 @@ def main(argv: list[str] | None = None) -> int:
                                          base=base, lr=args.lr, seed=seed, threads=args.threads,
                                          device=device, split_fractions=fr, log=None,
                                          augment=True, amp=cuda, weights=weights,
-                                         where=where)
+                                         where=where, ignore=args.ignore or None,
+                                         ignore_values=args.ignore_values)
                 torch.save(model.state_dict(), saved)
                 results["cells"] = [c for c in results["cells"]
                                     if not (c["config"] == fp and c["seed"] == seed)]

@@ -28,7 +28,14 @@ mask). REF must hold the same samples with the same seismic bytes (a relabel of 
 STORE the relabel of REF); every scored sample is checked.
 
     PYTHONPATH=$PWD python benchmarks/learnability.py STORE [--steps N] [--seed 0]
-        [--train-runs N] [--save-pred PRED.npz] [--reference REF]
+        [--train-runs N] [--save-pred PRED.npz] [--reference REF] [--ignore ARRAY[=V,V]]
+        [--score-without ARRAY[=V,V]]
+
+Pixels where the labels are in doubt: ``--ignore ARRAY[=V,V]`` trains with them left out
+of the loss (``train_unet(ignore=)``; ``fault_uncertain`` marks where label and visible
+offsets disagree, docs/labels.md), and ``--score-without ARRAY[=V,V]`` adds every score with
+them left out (prediction 0 and no label there; a prediction within the tolerance of a
+left-out label still counts against the rest), suffixed ``_kept``.
 
 ``--save-pred`` writes a few held-out sections (seismic, labels, predicted probabilities, the
 train-chosen thresholds) for ``benchmarks/learnability_figure.py``, which draws label sets side
@@ -66,13 +73,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--save-n", type=int, default=4, help="held-out sections saved")
     ap.add_argument("--reference", help="score against this relabelled store's labels")
     ap.add_argument("--no-progress", action="store_true", help="no training progress bar on stderr")
+    ap.add_argument("--ignore", metavar="ARRAY[=V,V]",
+                    help="train with these pixels left out of the loss (train_unet(ignore=))")
+    ap.add_argument("--score-without", metavar="ARRAY[=V,V]",
+                    help="also score with these pixels left out (prediction 0 and no label "
+                         "there): the *_kept figures")
     args = ap.parse_args(argv)
 
     import torch
 
     from demseis.datasets import FaultSegDataset
     from demseis.evaluation import score
-    from demseis.learning.train import predict_sections, train_unet
+    from demseis.learning.train import parse_ignore, predict_sections, train_unet
 
     cuda = torch.cuda.is_available() if args.device is None else args.device.startswith("cuda")
     steps = args.steps or (3000 if cuda else 300)
@@ -86,11 +98,14 @@ def main(argv: list[str] | None = None) -> int:
             raise SystemExit(f"--train-runs {args.train_runs}: the store has {train_runs.size} "
                              "train runs")
         where = {"run_id": [int(r) for r in train_runs[:args.train_runs]]}
+    ignore, ignore_values = parse_ignore(args.ignore)
+    without, without_values = parse_ignore(args.score_without)
     t0 = time.perf_counter()
     model, info = train_unet(args.store, steps=steps, crop=args.crop, batch=args.batch,
                              base=base, lr=args.lr, seed=args.seed, threads=args.threads,
                              device=args.device, split_fractions=fr, log=None, where=where,
-                             progress=not args.no_progress)
+                             progress=not args.no_progress, ignore=ignore,
+                             ignore_values=ignore_values)
     out: dict = {"benchmark": "learnability", "store": args.store, "steps": info["steps"],
                  "base": base, "crop": args.crop, "batch": args.batch, "seed": args.seed,
                  "device": info["device"], "train_seconds": info["seconds"],
@@ -103,13 +118,19 @@ def main(argv: list[str] | None = None) -> int:
     truth_store = args.reference or args.store
     if args.reference:
         out["reference"] = args.reference
+    if ignore:
+        out["ignore"] = [ignore, ignore_values]
+        out["ignored_fraction"] = info["ignored_fraction"]
+    if without:
+        out["score_without"] = [without, without_values]
     for split in ("train", "test"):
         kw = dict(inputs=("seismic",), split=split, split_fractions=fr,
                   where=where if split == "train" else None)
         ds = FaultSegDataset(truth_store, targets=("fault",), **kw)
         with_slip = split == "test" and "slip_m" in ds.layout.arrays
-        if with_slip:  # the held-out slip too, read with the same samples
-            ds = FaultSegDataset(truth_store, targets=("fault", "slip_m"), **kw)
+        extra = (("slip_m",) if with_slip else ()) + ((without,) if without else ())
+        if extra:  # the held-out slip, the pixels left out of a score, with the same samples
+            ds = FaultSegDataset(truth_store, targets=("fault", *extra), **kw)
         idx = np.arange(len(ds))
         if split == "train" and len(ds) > args.max_train_eval:
             idx = np.sort(rng.choice(len(ds), args.max_train_eval, replace=False))
@@ -118,20 +139,30 @@ def main(argv: list[str] | None = None) -> int:
         if args.reference:
             same_seismic(FaultSegDataset(args.store, targets=("fault",), **kw), ds, idx, seis,
                          args.store, args.reference)
-        fault = [y["fault"] if with_slip else y for _, y in pairs]
+        fault = [y["fault"] if extra else y for _, y in pairs]
         truth = np.stack([(y.numpy() > 0) for y in fault])
         prob = predict_sections(model, seis, device=info["device"])
         out[f"{split}_samples"] = len(idx)
         out[f"{split}_runs"] = int(len(np.unique(ds.run_ids[idx])))
-        for tol in (2, 4):
-            r = score(prob, truth, threshold=0.5, tolerance_px=tol)
-            for k in ("precision", "recall", "f1", "ap", "ods_f1"):
-                out[f"{split}_{k}_tol{tol}"] = round(float(getattr(r, k)), 4)
-            if split == "train":
-                out[f"train_ods_threshold_tol{tol}"] = round(float(r.ods_threshold), 4)
-            else:  # the held-out F1 at the threshold chosen on the train runs (same sweep)
-                k = int(np.argmin(np.abs(r.thresholds - out[f"train_ods_threshold_tol{tol}"])))
-                out[f"test_f1_at_train_threshold_tol{tol}"] = round(float(r.f1_curve[k]), 4)
+        scored = [("", prob, truth)]
+        if without:
+            u = np.stack([y[without].numpy() for _, y in pairs])
+            left_out = u != 0 if without_values is None else np.isin(u, without_values)
+            scored.append(("_kept", np.where(left_out, 0.0, prob), truth & ~left_out))
+            out[f"{split}_left_out_fraction"] = round(float(left_out.mean()), 4)
+        for suffix, p_, t_ in scored:
+            for tol in (2, 4):
+                r = score(p_, t_, threshold=0.5, tolerance_px=tol)
+                for k in ("precision", "recall", "f1", "ap", "ods_f1"):
+                    out[f"{split}_{k}_tol{tol}{suffix}"] = round(float(getattr(r, k)), 4)
+                if split == "train":
+                    out[f"train_ods_threshold_tol{tol}{suffix}"] = round(float(r.ods_threshold),
+                                                                         4)
+                else:  # the held-out F1 at the threshold chosen on the train runs (same sweep)
+                    k = int(np.argmin(np.abs(r.thresholds
+                                             - out[f"train_ods_threshold_tol{tol}{suffix}"])))
+                    out[f"test_f1_at_train_threshold_tol{tol}{suffix}"] = round(
+                        float(r.f1_curve[k]), 4)
         if with_slip:
             slip = np.stack([y["slip_m"].numpy() for _, y in pairs])
             out["test_recall_by_slip_tol2"] = recall_by_slip(

@@ -306,8 +306,8 @@ def train(store: Any, out: str | Path = "model.pt", **kwargs: Any) -> dict[str, 
     out : the model file.
     **kwargs : ``weights`` (one positive number per store; default equal), ``steps`` (300),
         ``crop``, ``batch``, ``base``, ``lr``, ``seed``, ``device``, ``val_every``,
-        ``save_every``, ``resume``, ``threads``, ``progress``, ``log``
-        (:func:`demseis.learning.model.train_model`).
+        ``save_every``, ``resume``, ``threads``, ``progress``, ``log``, ``ignore`` and
+        ``ignore_values`` (:func:`demseis.learning.model.train_model`).
     """
     train_model = _learning_model().train_model
     if isinstance(store, (list, tuple)):

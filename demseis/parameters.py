@@ -545,6 +545,11 @@ _DECLARED: tuple[Param, ...] = (
                "faults, so every offset the section shows has a label"),
     _label("offset_min_rows", int, 10, 2, 1000, unit="rows",
            doc="with offset_faults: the fewest output rows such a fault spans"),
+    _label("fault_uncertain", bool, False,
+           doc="also store fault_uncertain: where the fault label and the reflectors' visible "
+               "offsets disagree (1: a labelled pixel offset less than min_throw_samples, 2: an "
+               "offset of at least that with no label within 2 px), for training that leaves "
+               "them out of the loss (demseis train --ignore); needs rendering = strata"),
 )
 
 #: every declared parameter by name

@@ -9,7 +9,8 @@ The store layout (:mod:`demseis.datasets`), the rendering pipeline's fills and a
 
 How an array is made:
 
-- ``seismic`` and ``impedance`` by the renderer (:data:`RENDERED`);
+- ``seismic`` and ``impedance`` by the renderer (:data:`RENDERED`), and ``fault_uncertain``
+  by the renderer from the labels on the output grid (:data:`RENDERED_LABELS`);
 - a label with a ``producer`` by calling it on each geological state of a run (the engine's
   :class:`demseis.generator.engines.State`): ``producer(state) -> (nz, nx)`` array on the
   depth grid, converted to time by the pipeline like every label;
@@ -39,6 +40,9 @@ from demseis.registry import Registry
 ROLES = ("input", "label")
 #: arrays the renderer makes from the property grids (every other array is a label)
 RENDERED = ("seismic", "impedance")
+#: labels the renderer makes on the output grid from the engine's labels and the reference map
+#: (:func:`demseis.labels.offsets.offset_disagreement`), not the engines
+RENDERED_LABELS = ("fault_uncertain",)
 
 
 @dataclass(frozen=True)
@@ -58,7 +62,8 @@ class SampleArray:
     valid_range : inclusive (low, high) of an integer label (high None: unbounded), checked on
         write and by ``validate``; None for float arrays.
     compressed : Blosc-lz4 (labels, strain) or raw (network inputs, read as zero-copy crops).
-    option : name of the boolean ``[output]`` key that turns the array on; None: always stored.
+    option : name of the boolean ``[output]`` or ``[labels]`` key that turns the array on;
+        None: always stored.
     producer : ``producer(state) -> (nz, nx)`` array for a label the engines do not make
         (see the module docstring); None for the built-in arrays.
     """
@@ -131,6 +136,10 @@ for _a in (
                 fill=0, valid_range=(0, 2)),
     SampleArray("impedance", "float32", "input", "kg/(m^2 s)", "acoustic impedance", fill=0.0,
                 compressed=False, option="impedance"),
+    SampleArray("fault_uncertain", "uint8", "label", "1",
+                "where the fault label and the visible offsets disagree: 0 they agree, "
+                "1 labelled but offset less than min_throw_samples, 2 offset but unlabelled",
+                fill=0, valid_range=(0, 2), option="fault_uncertain"),
 ):
     SAMPLE_ARRAYS.register(_a.name, _a)
 del _a
@@ -191,4 +200,5 @@ def stored_arrays(options: Iterable[str] = ()) -> tuple[str, ...]:
 
 def engine_labels() -> tuple[str, ...]:
     """The labels every engine makes itself (no producer), in store order."""
-    return tuple(n for n, a in SAMPLE_ARRAYS.items() if a.role == "label" and a.producer is None)
+    return tuple(n for n, a in SAMPLE_ARRAYS.items()
+                 if a.role == "label" and a.producer is None and n not in RENDERED_LABELS)

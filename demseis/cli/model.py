@@ -29,6 +29,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--weights", default=None, metavar="W1,W2,...",
                    help="one positive weight per store, comma-separated: the share of the "
                    "training samples drawn from each (default: equal)")
+    t.add_argument("--ignore", default=None, metavar="ARRAY[=V,V]",
+                   help="leave the pixels of this label array out of the training loss (with "
+                   "these values; default any non-zero), in the stores that hold it; e.g. "
+                   "fault_uncertain, stored with [labels] fault_uncertain = true (docs/labels.md)")
     t.add_argument("--out", default="model.pt", help="model file (default model.pt)")
     t.add_argument("--steps", type=pos_int, default=300,
                    help="optimiser steps in all, counting those before a --resume (default 300)")

@@ -171,5 +171,62 @@ def offset_faults(maps: dict[str, np.ndarray], jump_m: np.ndarray, samples_per_m
     return out
 
 
-__all__ = ["jumps_to_samples", "offset_faults", "pair_jumps", "pair_offsets", "pixel_offsets",
+#: ``fault_uncertain`` classes (:func:`offset_disagreement`)
+LABEL_NOT_SHOWN = 1
+OFFSET_NOT_LABELLED = 2
+
+
+def offset_ridge(pair: np.ndarray, min_samples: float) -> np.ndarray:
+    """(rows, npair + 1) bool: the pixel of each pair (column j for the pair (j, j + 1)) whose
+    offset (``pair``, output samples, NaN read as 0) is at least ``min_samples`` and no
+    smaller than its row neighbours', the centre of a step rather than the fringe a window
+    spreads it over (as :func:`offset_faults` finds steps)."""
+    off = np.pad(np.nan_to_num(np.asarray(pair, dtype=np.float64), nan=0.0), ((0, 0), (0, 1)))
+    left = np.pad(off, ((0, 0), (1, 0)))[:, :-1]
+    right = np.pad(off, ((0, 0), (0, 1)))[:, 1:]
+    return (off >= min_samples) & (off >= left) & (off >= right)
+
+
+def offset_disagreement(fault: np.ndarray, pair: np.ndarray, *, min_samples: float,
+                        near_px: int = 2) -> np.ndarray:
+    """Where a fault label and the reflectors' visible offsets disagree, (H, W) uint8.
+
+    - ``LABEL_NOT_SHOWN`` (1): a labelled pixel with no pixel within ``near_px`` of it whose
+      offset (:func:`window_max` of ``pair``: the pairs within one trace) is at least
+      ``min_samples``: the label marks slip that the section does not show as a step of the
+      reflectors;
+    - ``OFFSET_NOT_LABELLED`` (2): the centre of a step of at least ``min_samples``
+      (:func:`offset_ridge`) with no labelled pixel within ``near_px``: a step the section
+      shows that no label marks;
+    - 0 elsewhere: the label and the section agree (a labelled step, or neither).
+
+    ``near_px`` is a square neighbourhood (Chebyshev distance), as the scoring tolerance.
+
+    Parameters
+    ----------
+    fault : (H, W) fault label (non-zero on a fault).
+    pair : (H, W - 1) offset between the traces j and j + 1 in output samples
+        (:func:`jumps_to_samples` of the jumps; NaN or 0 where there is no rock).
+    """
+    lab = np.asarray(fault) > 0
+    p = np.asarray(pair, dtype=np.float64)
+    if p.shape != (lab.shape[0], lab.shape[1] - 1):
+        raise ValueError(f"pair has shape {p.shape}; a fault label of shape {lab.shape} needs "
+                         f"({lab.shape[0]}, {lab.shape[1] - 1})")
+    shown = window_max(p) >= float(min_samples)
+    steps = offset_ridge(p, float(min_samples))
+    out = np.zeros(lab.shape, dtype=np.uint8)
+    if near_px > 0:
+        square = np.ones((2 * near_px + 1,) * 2, dtype=bool)
+        near_shown = binary_dilation(shown, square)
+        near_lab = binary_dilation(lab, square)
+    else:
+        near_shown, near_lab = shown, lab
+    out[lab & ~near_shown] = LABEL_NOT_SHOWN
+    out[steps & ~near_lab] = OFFSET_NOT_LABELLED
+    return out
+
+
+__all__ = ["LABEL_NOT_SHOWN", "OFFSET_NOT_LABELLED", "jumps_to_samples", "offset_disagreement",
+           "offset_faults", "offset_ridge", "pair_jumps", "pair_offsets", "pixel_offsets",
            "window_max"]

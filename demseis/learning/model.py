@@ -104,7 +104,8 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
                 seed: int = 0, device: str | None = None, val_every: int | None = None,
                 save_every: int = 50, resume: bool = False, threads: int | None = None,
                 progress: bool = True, log: Callable[[str], None] | None = print,
-                weights: Sequence[float] | None = None) -> dict[str, Any]:
+                weights: Sequence[float] | None = None, ignore: str | None = None,
+                ignore_values: Sequence[int] | None = None) -> dict[str, Any]:
     """Train the U-Net on ``store`` (or several stores) and write it to ``out``; return the
     held-out metrics.
 
@@ -130,6 +131,10 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
     log : called with progress lines (None: silent).
     weights : one positive weight per store (default: equal); store s gives the share
         ``weights[s] / sum(weights)`` of the training samples drawn.
+    ignore, ignore_values : a label array whose pixels (with these values; None: any
+        non-zero) are left out of the training loss, in the stores that hold it
+        (:func:`demseis.learning.train.train_unet`); the test metrics still score every
+        pixel against ``fault``.
 
     Returns
     -------
@@ -168,6 +173,9 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
                                 "stores": resolved, "weights": weights, "steps": steps,
                                 "crop": crop, "batch": batch, "base": base, "lr": lr,
                                 "seed": seed}
+    if ignore is not None:  # only then: the settings of a training without it stay as they were
+        settings["ignore"] = [ignore, None if ignore_values is None
+                              else [int(v) for v in ignore_values]]
     state = None
     if resume:
         if not ckpt.is_file():
@@ -180,9 +188,10 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
         shares_before = None if w_before is not None and len(w_before) != len(stores_before) \
             else check_weights(w_before, len(stores_before))
         if stores_before != resolved or before.get("base") != base or shares_before is None \
-                or not np.allclose(shares_before, shares):
-            raise InputError(f"--resume: {str(ckpt)!r} was trained on other stores, weights or "
-                             "width")
+                or not np.allclose(shares_before, shares) \
+                or before.get("ignore") != settings.get("ignore"):
+            raise InputError(f"--resume: {str(ckpt)!r} was trained on other stores, weights, "
+                             "width or --ignore")
         if int(state["step"]) >= steps:
             raise InputError(f"--resume: {str(ckpt)!r} has done {state['step']} steps already; "
                              "give a larger --steps")
@@ -194,7 +203,8 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
                              batch=batch, base=base, lr=lr, seed=seed, threads=threads,
                              device=device, val_every=val_every or max(1, steps // 5),
                              patience=steps, log=log, progress=progress, resume=state,
-                             save_every=save_every, save=save, weights=weights)
+                             save_every=save_every, save=save, weights=weights, ignore=ignore,
+                             ignore_values=ignore_values)
     per_store, counts, n_test, n_runs = [], [], 0, 0
     for i, s in enumerate(stores):
         test = FaultSegDataset(s, inputs=("seismic",), targets=("fault",), split="test")

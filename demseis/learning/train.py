@@ -98,7 +98,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
                progress: bool = False, resume: Mapping[str, Any] | None = None,
                save_every: int | None = None,
                save: Callable[[dict[str, Any]], None] | None = None,
-               weights: Sequence[float] | None = None) -> tuple[Any, dict[str, Any]]:
+               weights: Sequence[float] | None = None, ignore: str | None = None,
+               ignore_values: Sequence[int] | None = None) -> tuple[Any, dict[str, Any]]:
     """Train :func:`build_unet` on random crops of a store's ``split``.
 
     Parameters
@@ -108,6 +109,11 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         replacement) so that store s gives the share ``weights[s] / sum(weights)`` of every
         batch on average (a mix; :func:`mix_sampler`).
     weights : one positive weight per store (default: equal shares); :func:`check_weights`.
+    ignore : a label array whose pixels with one of ``ignore_values`` (None: any non-zero
+        value) are left out of the loss (binary cross-entropy and Dice alike), in each store
+        that holds it; stores without it train on every pixel. ``"fault_uncertain"``
+        (``[labels] fault_uncertain = true``) marks where the fault label and the section's
+        visible offsets disagree. None: every pixel counts.
     augment : random left-right flips, polarity flips and amplitude scaling (x 0.5 .. 2) of
         each training crop.
     amp : CUDA mixed precision (autocast + gradient scaling); None = on when on CUDA.
@@ -136,7 +142,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     -------
     (model, info) with info keys steps, epochs, seconds, final_loss, pos_weight, n_samples,
     n_runs, device, drawn_per_store (training samples drawn from each store, counted over the
-    steps, a resumed training's included); with validation also best_val_f1 (pooled over
+    steps, a resumed training's included), with ``ignore`` ignored_fraction (the share of the
+    first batches' pixels left out of the loss); with validation also best_val_f1 (pooled over
     every store's val runs: the selection criterion), val_f1_per_store (each store's F1 of
     the kept model), best_step, stopped_early, val_history.
     """
@@ -153,9 +160,11 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     dev = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
     stores = list(store) if isinstance(store, (list, tuple)) else [store]
     shares = check_weights(weights, len(stores))
-    parts = [FaultSegDataset(s, inputs=("seismic",), targets=(target,), split=split,
-                             crop=(crop, crop), seed=seed, where=where,
-                             split_fractions=split_fractions) for s in stores]
+    read = dict(inputs=("seismic",), split=split, crop=(crop, crop), seed=seed, where=where,
+                split_fractions=split_fractions)
+    parts = [FaultSegDataset(s, targets=(target,), **read) for s in stores]
+    if ignore is not None:
+        parts = _with_ignore(parts, stores, target, ignore, read)
     for s, part in zip(stores, parts):
         if len(part) == 0:
             raise InputError(f"the {split} split of store {str(s)!r} is empty")
@@ -178,12 +187,20 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     scaler = torch.amp.GradScaler("cuda", enabled=use_amp)
     if resume is None:
         # fault pixels are rare: weight them by the background / fault ratio of a few batches
-        frac = np.mean([float((y > 0).float().mean()) for _, (_, y) in zip(range(8), loader)])
+        if ignore is None:
+            frac = np.mean([float((y > 0).float().mean()) for _, (_, y) in zip(range(8), loader)])
+        else:
+            first = [_split_ignore(y, target, ignore, ignore_values) for _, (_, y) in
+                     zip(range(8), loader)]
+            kept = sum(float(k.sum()) for _, k in first)
+            frac = sum(float(((y > 0) & k).sum()) for y, k in first) / max(kept, 1.0)
+            ignored_fraction = 1.0 - kept / max(sum(k.numel() for _, k in first), 1)
         pos_weight = torch.tensor(min((1 - frac) / max(frac, 1e-6), 50.0), device=dev)
         draws.counts[:] = 0  # those batches were looked at, not trained on
     else:
         frac = float(resume["fault_fraction"])
         pos_weight = torch.tensor(float(resume["pos_weight"]), device=dev)
+        ignored_fraction = float("nan")
     model = build_unet(base).to(dev)
     opt = torch.optim.Adam(model.parameters(), lr=lr)
     bce = torch.nn.BCEWithLogitsLoss(pos_weight=pos_weight)
@@ -248,15 +265,26 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         model.train()
         for x, y in loader:
             x = x.to(dev)
-            y = (y > 0).float()[:, None].to(dev)
-            if augment:
-                x, y = _augment(x, y, gen)
+            if ignore is None:
+                y = (y > 0).float()[:, None].to(dev)
+                if augment:
+                    x, y = _augment(x, y, gen)
+            else:
+                y, keep = _split_ignore(y, target, ignore, ignore_values)
+                # one tensor through the flips, so the mask moves with its label
+                yk = torch.stack([(y > 0), keep], dim=1).float().to(dev)
+                if augment:
+                    x, yk = _augment(x, yk, gen)
+                y, keep = yk[:, :1], yk[:, 1:]
             with torch.autocast(dev.type, enabled=use_amp):
                 logits = model(x)
             logits = logits.float()
-            p = torch.sigmoid(logits)
-            dice = 1 - (2 * (p * y).sum() + 1) / (p.sum() + y.sum() + 1)
-            loss = bce(logits, y) + dice
+            if ignore is None:
+                p = torch.sigmoid(logits)
+                dice = 1 - (2 * (p * y).sum() + 1) / (p.sum() + y.sum() + 1)
+                loss = bce(logits, y) + dice
+            else:
+                loss = masked_loss(logits, y, keep, pos_weight)
             opt.zero_grad()
             scaler.scale(loss).backward()
             scaler.step(opt)
@@ -288,6 +316,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
             "pos_weight": round(float(pos_weight), 2), "n_samples": len(ds),
             "n_runs": int(len(np.unique(ds.run_ids))), "device": str(dev), "amp": use_amp,
             "augment": bool(augment), "drawn_per_store": [int(c) for c in draws.counts]}
+    if ignore is not None:
+        info["ignored_fraction"] = round(float(ignored_fraction), 4)
     if val is not None:
         info.update(best_val_f1=round(best["f1"], 4), best_step=best["step"],
                     val_f1_per_store=best.get("per_store"),
@@ -397,6 +427,99 @@ class _Mixed:
     def set_epoch(self, epoch: int) -> None:
         for p in self.parts:
             p.set_epoch(epoch)
+
+
+def parse_ignore(text: str | None) -> tuple[str | None, list[int] | None]:
+    """``--ignore fault_uncertain=1,2`` as the array's name and its values (None: any
+    non-zero value); (None, None) for None.
+
+    Raises
+    ------
+    InputError
+        No name, or a value that is not an integer.
+    """
+    if text is None:
+        return None, None
+    name, sep, values = text.partition("=")
+    try:
+        vals = [int(v) for v in values.split(",")] if sep else None
+    except ValueError:
+        vals = []
+    if not name or vals == []:
+        raise InputError(f"--ignore {text!r}: give ARRAY or ARRAY=V1,V2 with integer values, "
+                         "e.g. fault_uncertain=1,2")
+    return name, vals
+
+
+def masked_loss(logits: Any, y: Any, keep: Any, pos_weight: Any) -> Any:
+    """The training loss over the kept pixels only: binary cross-entropy with ``pos_weight``
+    averaged over the pixels where ``keep`` is 1, plus soft Dice ``1 - (2 sum(p y) + 1) /
+    (sum(p) + sum(y) + 1)`` with ``p`` and ``y`` summed over those pixels. With every pixel
+    kept it is the loss :func:`train_unet` uses without ``ignore``.
+
+    Parameters
+    ----------
+    logits, y, keep : tensors of one shape; ``y`` and ``keep`` 0 or 1 (float).
+    pos_weight : the positive class's weight (a scalar tensor).
+    """
+    torch = import_torch("training")
+    p = torch.sigmoid(logits) * keep
+    yk = y * keep
+    dice = 1 - (2 * (p * yk).sum() + 1) / (p.sum() + yk.sum() + 1)
+    per_px = torch.nn.functional.binary_cross_entropy_with_logits(
+        logits, yk, pos_weight=pos_weight, reduction="none")
+    return (per_px * keep).sum() / keep.sum().clamp_min(1.0) + dice
+
+
+def _with_ignore(parts: list, stores: list, target: str, ignore: str,
+                 read: Mapping[str, Any]) -> list:
+    """``parts`` read again (``read``: their other FaultSegDataset arguments) with the
+    ``ignore`` array as a second target where their store holds it, and an all-zero one made
+    up where it does not (so every item is alike).
+
+    Raises
+    ------
+    InputError
+        No store holds ``ignore``.
+    """
+    have = [ignore in p.layout.arrays for p in parts]
+    if not any(have):
+        held = sorted({a for p in parts for a in p.layout.arrays})
+        raise InputError(f"ignore = {ignore!r}: no training store holds that array; they hold "
+                         f"{', '.join(held)} (fault_uncertain is stored with [labels] "
+                         "fault_uncertain = true)")
+    out = []
+    for s, h in zip(stores, have):
+        out.append(FaultSegDataset(s, targets=(target, ignore) if h else (target,),
+                                   transform=None if h else _NoneIgnored(target, ignore),
+                                   **read))
+    return out
+
+
+class _NoneIgnored:
+    """The item transform of a store without the ignore array: ``y`` becomes the dict of
+    several targets, with an all-zero ignore array (a class, so that it pickles)."""
+
+    def __init__(self, target: str, ignore: str) -> None:
+        self.target, self.ignore = target, ignore
+
+    def __call__(self, x: Any, y: Any) -> tuple[Any, dict[str, Any]]:
+        torch = import_torch("training")
+        return x, {self.target: y, self.ignore: torch.zeros(y.shape, dtype=torch.uint8)}
+
+
+def _split_ignore(y: Mapping[str, Any], target: str, ignore: str,
+                  values: Sequence[int] | None) -> tuple[Any, Any]:
+    """(label, keep): the batch's ``target`` and the bool mask of the pixels the loss reads."""
+    torch = import_torch("training")
+    u = y[ignore]
+    if values is None:
+        skip = u != 0
+    else:
+        skip = torch.zeros(u.shape, dtype=torch.bool)
+        for v in values:
+            skip |= u == int(v)
+    return y[target], ~skip
 
 
 def _augment(x: Any, y: Any, gen: Any) -> tuple[Any, Any]:

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from demseis.datasets import create_store, write_shard
-from demseis.schema import SAMPLE_ARRAYS
+from demseis.schema import SAMPLE_ARRAYS, sample_array
 from demseis.types import Snapshot
 
 PARAMS = {"run_id": "int32", "snapshot": "int16", "freq_hz": "float32", "snr_db": "float32",
@@ -94,7 +94,7 @@ def every_array_shard(k: int, variant: int = 0) -> tuple[dict, dict, list[Snapsh
             a = rng.normal(size=(s, *shape)).astype(dtype)
             a[1] = -0.0  # a float chunk of negative zeros
             a[2] = 0.0
-        elif name in ("fault", "damage", "sense"):
+        elif sample_array(name).valid_range[1] is not None:  # a bounded label: 0 or 1
             a = rng.integers(0, 2, (s, *shape), dtype=dtype)
             a[0] = 0  # a constant chunk that is not the fill value 255
         else:

@@ -162,7 +162,7 @@ def test_generate_help_names_every_preset_and_every_file_is_a_preset(capsys):
     ({"model": {"widht_m": 100.0}}, "model.widht_m: unknown key; did you mean 'width_m'?; allowed "
                                     "keys are engine, height_m,"),
     ({"labels": {"fault_stlye": "picks"}}, "labels.fault_stlye: unknown key; did you mean "
-                                           "'fault_style'? (33 keys are allowed there: "
+                                           "'fault_style'? (34 keys are allowed there: "
                                            "`demseis params` lists them)"),
     ({"swep": {}}, "swep: unknown top-level key; did you mean 'sweep'?; allowed are grid,"),
 ])

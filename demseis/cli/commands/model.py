@@ -8,6 +8,7 @@ import sys
 
 from demseis.api import predict, train
 from demseis.errors import InputError
+from demseis.learning.train import parse_ignore
 from demseis.plotting import plot_section
 
 
@@ -24,11 +25,12 @@ def _weights(text: str | None) -> list[float] | None:
 
 def cmd_train(args: argparse.Namespace) -> int:
     quiet = args.quiet
+    ignore, ignore_values = parse_ignore(args.ignore)
     metrics = train(args.store, args.out, weights=_weights(args.weights), steps=args.steps, crop=args.crop, batch=args.batch,
           base=args.base, lr=args.lr, seed=args.seed, device=args.device,
           val_every=args.val_every, save_every=args.save_every, resume=args.resume,
           threads=args.threads, progress=not quiet and sys.stderr.isatty(),
-          log=None if quiet else print)
+          log=None if quiet else print, ignore=ignore, ignore_values=ignore_values)
     for text in metrics.get("warnings", []):
         print(f"demseis: warning: {text}", file=sys.stderr)
     return 0

@@ -128,8 +128,8 @@ def crop_to(section: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
 
 def array_dtypes(cfg: Config) -> dict[str, str]:
     """Name → dtype of the per-sample arrays this config stores, in store order."""
-    options = {a.option for _, a in SAMPLE_ARRAYS.items()
-               if a.option is not None and getattr(cfg.output, a.option, False)}
+    options = {a.option for _, a in SAMPLE_ARRAYS.items() if a.option is not None
+               and (getattr(cfg.output, a.option, False) or getattr(cfg.labels, a.option, False))}
     return {name: SAMPLE_ARRAYS.get(name).dtype for name in stored_arrays(options)}
 
 

@@ -463,6 +463,11 @@ def _cross_checks(cfg: Config) -> None:
                           "reference map, which output.rendering = "
                           f"{cfg.output.rendering!r} has not: set [output] rendering = 'strata' "
                           "or labels.throw_from = 'slip'")
+    if cfg.labels.fault_uncertain and not rendering.reference:
+        raise ConfigError("labels.fault_uncertain = true compares the labels with the "
+                          "reflectors' offsets on the reference map, which output.rendering = "
+                          f"{cfg.output.rendering!r} has not: set [output] rendering = 'strata' "
+                          "or labels.fault_uncertain = false")
     engine.check(cfg)
 
 

@@ -27,7 +27,8 @@ from demseis.generator.render.survey import (damage_factor, fill_gaps, fine_dept
                                              hold_small_steps, labels_at_traces, nearest_columns,
                                              reference_points, substeps, to_time)
 from demseis.labels import pick_faults, sample_facts, throw_samples
-from demseis.labels.offsets import jumps_to_samples, offset_faults, pair_jumps, window_max
+from demseis.labels.offsets import (jumps_to_samples, offset_disagreement, offset_faults,
+                                    pair_jumps, window_max)
 from demseis.registry import FAULT_STYLES, RENDERINGS
 from demseis.schema import SAMPLE_ARRAYS, engine_labels
 from demseis.seismic import (add_noise, coarse_velocity, imaged_sections, imaging_mode,
@@ -137,7 +138,8 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
     vp = img.vp_cell
     style: FaultStyle = FAULT_STYLES.get(cfg.labels.fault_style)
     extra = {}
-    if style.offsets and cfg.labels.throw_from == "offset":
+    uncertain = "fault_uncertain" in arrays
+    if (style.offsets and cfg.labels.throw_from == "offset") or uncertain:
         extra[_JUMP] = cell_jumps(cfg, img)
     if t_s is not None:
         fills = {name: SAMPLE_ARRAYS.get(name).fill for name in [*maps, "impedance"]}
@@ -147,7 +149,11 @@ def render_state(cfg: Config, run: EngineRun, renders: list[Render], state: Stat
     else:
         maps = {**maps, **extra}
     jump = maps.pop(_JUMP, None)
-    maps = style.draw(cfg, maps, vp, jump)
+    maps = style.draw(cfg, maps, vp, jump if cfg.labels.throw_from == "offset" else None)
+    if uncertain:
+        pair = jumps_to_samples(jump[:, :-1], samples_per_m(cfg, jump.shape, vp), jump.shape)
+        maps["fault_uncertain"] = offset_disagreement(
+            maps["fault"], pair, min_samples=max(float(cfg.labels.min_throw_samples), 1.0))
     facts = sample_facts(maps)
     rendered = {"impedance": impedance}
     codes = param_codes()
@@ -208,10 +214,7 @@ def output_picks(cfg: Config, maps: Mapping[str, np.ndarray], vp_m_s: np.ndarray
     t_s = time_axis_of(cfg)
     if jump_m is not None:
         lab = cfg.labels
-        if t_s is None:
-            per_m = np.full(jump_m.shape, 1.0 / float(grid_of(cfg).cell_m))
-        else:
-            per_m = 2.0 / (np.maximum(vp_m_s, 1.0) * float(cfg.output.dt_s))
+        per_m = samples_per_m(cfg, jump_m.shape, vp_m_s)
         if lab.offset_faults:
             maps = offset_faults(dict(maps), jump_m, per_m, trace_spacing(cfg), 1.0 / per_m,
                                  min_samples=max(float(lab.min_throw_samples), 1.0),
@@ -224,6 +227,14 @@ def output_picks(cfg: Config, maps: Mapping[str, np.ndarray], vp_m_s: np.ndarray
         throw = throw_samples(maps["slip_m"], maps["dip_deg"], vp_m_s=vp_m_s,
                               dt_s=float(cfg.output.dt_s))
     return pick_faults(maps, throw, cfg.labels.picks())
+
+
+def samples_per_m(cfg: Config, shape: tuple[int, int], vp_m_s: np.ndarray) -> np.ndarray:
+    """(H, W) output samples per metre of vertical offset on the output grid: ``1 / cell`` in
+    depth, ``2 / (vp dt)`` on a two-way-time axis (``vp_m_s`` the interval velocity there)."""
+    if time_axis_of(cfg) is None:
+        return np.full(shape, 1.0 / float(grid_of(cfg).cell_m))
+    return 2.0 / (np.maximum(vp_m_s, 1.0) * float(cfg.output.dt_s))
 
 
 @dataclass(frozen=True)
