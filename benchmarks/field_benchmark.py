@@ -364,6 +364,7 @@ def summary_line(name: str, cells: list[dict], items: dict, config: dict) -> dic
             "seeds": sorted(c["seed"] for c in cells), **{k: config[k] for k in (
                 "steps", "base", "crop", "batch", "lr", "device")},
             **({"train_runs": config["train_runs"]} if "train_runs" in config else {}),
+            **({"ignore": config["ignore"]} if "ignore" in config else {}),
             "machine": " | ".join(sorted({c.get("machine", config["machine"]) for c in cells})),
             "train_seconds": stats([c["train"]["seconds"] for c in cells]),
             "score_seconds": stats([c["score_seconds"] for c in cells if "score_seconds" in c]),
