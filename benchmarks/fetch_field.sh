@@ -11,13 +11,9 @@
 #
 # FIELD_REPO=URL_OR_PATH fetches from a mirror instead. Then: python benchmarks/field_benchmark.py ... --field-dir DEST
 set -eu
-DEST=${1:-"$HOME/.cache/demseis-field/wrona-tutorial-03"}
-TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
-git clone --quiet --depth 1 --filter=blob:none --sparse \
-    "${FIELD_REPO:-https://github.com/thilowrona/seismic_deep_learning.git}" "$TMP/repo"
-git -C "$TMP/repo" sparse-checkout set tutorial-03
-mkdir -p "$DEST"
+. "$(dirname "$0")/_fetch_common.sh"
+fetch_start https://github.com/thilowrona/seismic_deep_learning.git tutorial-03 \
+    "$HOME/.cache/demseis-field/wrona-tutorial-03" "$@"
 cp "$TMP"/repo/tutorial-03/seismic_inline_*.png "$TMP"/repo/tutorial-03/mask_inline_*.png "$DEST"/
 git -C "$TMP/repo" rev-parse HEAD > "$DEST/SOURCE_COMMIT"
 ls "$DEST"

@@ -32,7 +32,8 @@ probability above 0.5:
 
 - ``--field-dir DIR`` (repeatable; the set is named after DIR): pairs ``seismic_<key>.*`` /
   ``mask_<key>.*`` (.png, .npy, .sgy), the layout of the tutorial-03 sections of
-  thilowrona/seismic_deep_learning (``benchmarks/fetch_field.sh`` fetches them);
+  thilowrona/seismic_deep_learning (``benchmarks/fetch_field.sh`` fetches them) and of the
+  Great South Basin lines of Cunha et al. (2020) (``benchmarks/fetch_field_gsb.sh``);
 - ``--field [NAME=]SECTION:MASK`` (repeatable; set ``field`` unless named).
 
 A display image (PNG) becomes an amplitude (grey level minus the image's median grey, unit
