@@ -605,7 +605,7 @@ def main(argv: list[str] | None = None) -> int:
                                          base=base, lr=args.lr, seed=seed, threads=args.threads,
                                          device=device, split_fractions=fr, log=None,
                                          augment=True, amp=cuda, weights=weights,
-                                         where=where, ignore=args.ignore or None,
+                                         where=where, ignore=args.ignore,
                                          ignore_values=args.ignore_values)
                 torch.save(model.state_dict(), saved)
                 results["cells"] = [c for c in results["cells"]

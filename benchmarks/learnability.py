@@ -84,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from demseis.datasets import FaultSegDataset
     from demseis.evaluation import score
-    from demseis.learning.train import parse_ignore, predict_sections, train_unet
+    from demseis.learning.train import ignored_pixels, parse_ignore, predict_sections, train_unet
 
     cuda = torch.cuda.is_available() if args.device is None else args.device.startswith("cuda")
     steps = args.steps or (3000 if cuda else 300)
@@ -147,7 +147,7 @@ def main(argv: list[str] | None = None) -> int:
         scored = [("", prob, truth)]
         if without:
             u = np.stack([y[without].numpy() for _, y in pairs])
-            left_out = u != 0 if without_values is None else np.isin(u, without_values)
+            left_out = ignored_pixels(u, without_values)
             scored.append(("_kept", np.where(left_out, 0.0, prob), truth & ~left_out))
             out[f"{split}_left_out_fraction"] = round(float(left_out.mean()), 4)
         for suffix, p_, t_ in scored:

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
-from demseis.datasets import FaultSegDataset
+from demseis.datasets import FaultSegDataset, open_store, store_layout
 from demseis.errors import InputError, import_torch
 from demseis.evaluation.scoring import SampleCounts, count_samples, summarise
 
@@ -162,9 +162,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     shares = check_weights(weights, len(stores))
     read = dict(inputs=("seismic",), split=split, crop=(crop, crop), seed=seed, where=where,
                 split_fractions=split_fractions)
-    parts = [FaultSegDataset(s, targets=(target,), **read) for s in stores]
-    if ignore is not None:
-        parts = _with_ignore(parts, stores, target, ignore, read)
+    parts = ([FaultSegDataset(s, targets=(target,), **read) for s in stores] if ignore is None
+             else _with_ignore(stores, target, ignore, read))
     for s, part in zip(stores, parts):
         if len(part) == 0:
             raise InputError(f"the {split} split of store {str(s)!r} is empty")
@@ -471,20 +470,20 @@ def masked_loss(logits: Any, y: Any, keep: Any, pos_weight: Any) -> Any:
     return (per_px * keep).sum() / keep.sum().clamp_min(1.0) + dice
 
 
-def _with_ignore(parts: list, stores: list, target: str, ignore: str,
-                 read: Mapping[str, Any]) -> list:
-    """``parts`` read again (``read``: their other FaultSegDataset arguments) with the
-    ``ignore`` array as a second target where their store holds it, and an all-zero one made
-    up where it does not (so every item is alike).
+def _with_ignore(stores: list, target: str, ignore: str, read: Mapping[str, Any]) -> list:
+    """The FaultSegDatasets of ``stores`` (``read``: their other arguments) with the ``ignore``
+    array as a second target where the store holds it, and an all-zero one made up where it
+    does not (so every item is alike).
 
     Raises
     ------
     InputError
         No store holds ``ignore``.
     """
-    have = [ignore in p.layout.arrays for p in parts]
+    layouts = [store_layout(open_store(s, "r")) for s in stores]
+    have = [ignore in lay.arrays for lay in layouts]
     if not any(have):
-        held = sorted({a for p in parts for a in p.layout.arrays})
+        held = sorted({a for lay in layouts for a in lay.arrays})
         raise InputError(f"ignore = {ignore!r}: no training store holds that array; they hold "
                          f"{', '.join(held)} (fault_uncertain is stored with [labels] "
                          "fault_uncertain = true)")
@@ -511,15 +510,19 @@ class _NoneIgnored:
 def _split_ignore(y: Mapping[str, Any], target: str, ignore: str,
                   values: Sequence[int] | None) -> tuple[Any, Any]:
     """(label, keep): the batch's ``target`` and the bool mask of the pixels the loss reads."""
-    torch = import_torch("training")
-    u = y[ignore]
+    return y[target], ~ignored_pixels(y[ignore], values)
+
+
+def ignored_pixels(u: Any, values: Sequence[int] | None) -> Any:
+    """Where the ignore array ``u`` (a NumPy array or a torch tensor) takes one of ``values``
+    (None: any non-zero value): the pixels left out of the loss, as a bool array of ``u``'s
+    kind."""
     if values is None:
-        skip = u != 0
-    else:
-        skip = torch.zeros(u.shape, dtype=torch.bool)
-        for v in values:
-            skip |= u == int(v)
-    return y[target], ~skip
+        return u != 0
+    out = (u != 0) & (u == 0)  # all False, of u's kind and shape
+    for v in values:
+        out = out | (u == int(v))
+    return out
 
 
 def _augment(x: Any, y: Any, gen: Any) -> tuple[Any, Any]:

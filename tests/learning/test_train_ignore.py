@@ -5,6 +5,8 @@ change nothing, stores without the array in a mix, and the errors."""
 from __future__ import annotations
 
 import json
+import runpy
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,9 +16,12 @@ torch = pytest.importorskip("torch")
 from demseis import datasets  # noqa: E402
 from demseis.cli import main  # noqa: E402
 from demseis.errors import InputError  # noqa: E402
-from demseis.learning.train import masked_loss, parse_ignore, train_unet  # noqa: E402
+from demseis.evaluation import score  # noqa: E402
+from demseis.learning.train import (ignored_pixels, masked_loss, parse_ignore,  # noqa: E402
+                                    train_unet)
 from tests.evaluation._helpers import toy_store  # noqa: E402
 
+BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "learnability.py"
 KW = dict(steps=4, crop=16, batch=4, base=4, threads=1, device="cpu", log=None, augment=True)
 
 
@@ -134,3 +139,36 @@ def test_cli_train_ignore_is_recorded_and_resume_checks_it(tmp_path, capsys):
                  "fault_uncertain=1", *fast]) == 0
     assert main(["train", str(a), "--out", str(out), "--steps", "2", "--ignore", "x=y",
                  *fast]) == 2
+
+
+def test_ignored_pixels_are_the_same_for_numpy_and_torch():
+    u = np.array([[0, 1, 2], [2, 0, 1]], np.uint8)
+    for values, want in ((None, u != 0), ([2], u == 2), ([1, 2], u > 0), ([], u < 0)):
+        np.testing.assert_array_equal(ignored_pixels(u, values), want)
+        np.testing.assert_array_equal(ignored_pixels(torch.from_numpy(u), values).numpy(), want)
+
+
+def test_learnability_scores_without_the_left_out_pixels(tmp_path, capsys):
+    """``--score-without``: the ``_kept`` scores are those of the predictions and labels with
+    the left-out pixels removed, recomputed here from the saved predictions."""
+    a = tmp_path / "a.zarr"
+    _store_with_uncertain(a, n_shards=5)
+    pred = tmp_path / "pred.npz"
+    bench = runpy.run_path(str(BENCH))["main"]
+    assert bench([str(a), "--steps", "2", "--crop", "16", "--batch", "4", "--base", "4",
+                  "--threads", "1", "--device", "cpu", "--test-fraction", "0.4", "--no-progress",
+                  "--ignore", "fault_uncertain=1", "--score-without", "fault_uncertain=2",
+                  "--save-pred", str(pred), "--save-n", "99"]) == 0
+    out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert out["ignore"] == ["fault_uncertain", [1]]
+    assert out["score_without"] == ["fault_uncertain", [2]]
+    assert 0 < out["ignored_fraction"] < 0.05
+    # class 2 is the band at column 4, rows 2-21: 20 of 24 x 24 pixels
+    assert out["test_left_out_fraction"] == pytest.approx(20 / 576, abs=1e-4)
+    saved = np.load(pred)
+    prob, truth = saved["prob"], saved["truth"]
+    left = np.zeros(prob.shape, bool)
+    left[:, 2:22, 4] = True
+    r = score(np.where(left, 0.0, prob), truth & ~left, threshold=0.5, tolerance_px=2)
+    assert out["test_f1_tol2_kept"] == pytest.approx(round(float(r.f1), 4), abs=1e-4)
+    assert out["test_ap_tol2_kept"] == pytest.approx(round(float(r.ap), 4), abs=1e-4)
