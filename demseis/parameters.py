@@ -345,6 +345,9 @@ _DECLARED: tuple[Param, ...] = (
        doc="strata: relative increase of density per km of burial"),
     _p("lateral_amplitude", float, "run", 0.03, 0.0, 0.2,
        doc="strata: relative std of Vp along a bed (density a quarter of it)"),
+    _p("lateral_density_amplitude", float, "run", 0.0, 0.0, 0.2,
+       doc="strata: relative std of density along a bed, added to the quarter of "
+           "lateral_amplitude: reflector strength varies along a bed with no time shift"),
     _p("lateral_correlation_m", float, "run", 27.0, 1.0, 1.0e6, unit="m",
        doc="strata: correlation length of the variation along a bed"),
     _p("boundary_undulation", float, "run", 0.1, 0.0, 0.17,
@@ -572,7 +575,7 @@ BED_FIELDS: tuple[str, ...] = (
     "bed_thickness_median_m", "bed_thickness_log_sigma", "bed_thickness_min_m",
     "bed_thickness_max_m", "facies_contrast", "facies_switch_probability", "fluctuation_sigma",
     "fluctuation_ar1", "vp_gradient_per_km", "rho_gradient_per_km", "lateral_amplitude",
-    "lateral_correlation_m", "boundary_undulation", "undulation_correlation_m")
+    "lateral_density_amplitude", "lateral_correlation_m", "boundary_undulation", "undulation_correlation_m")
 
 #: scalar fields of :class:`demseis.seismic.PropertyModel` (the same names)
 PROPERTY_FIELDS: tuple[str, ...] = ("gardner_a", "gardner_b", "vp_scatter", "rho_scatter",

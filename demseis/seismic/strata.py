@@ -29,7 +29,8 @@ the pre-kinematic ones. Each unit ``[bottom, top]`` is filled from its bottom wi
   with d the reference depth (km) of the bed's centre below the top of the highest unit
   (constant within a bed: beds stay blocky);
 - lateral variation along each bed: ``Vp(x0) = Vp_j (1 + a f_j(x0))``, ``rho(x0) = rho_j
-  (1 + a/4 f_j(x0))`` with a = ``lateral_amplitude`` and f_j a smooth random field of unit
+  (1 + (a/4 + a_rho) f_j(x0))`` with a = ``lateral_amplitude``, a_rho =
+  ``lateral_density_amplitude`` and f_j a smooth random field of unit
   variance, independent per bed, of ``N_MODES`` random Fourier modes ``sqrt(2/M) sum_m cos(k_m
   x0 + p_m)``, ``k_m ~ N(0, 1/L^2)`` (a Gaussian covariance ``exp(-r^2 / 2 L^2)``, L =
   ``lateral_correlation_m``), ``p_m`` uniform, tabulated every dx = min(L, L_u) / 8 (at
@@ -87,10 +88,14 @@ class BedModel:
     rho_gradient_per_km : relative increase of density per km of that depth, in [0, 0.5];
         default 0.015.
     lateral_amplitude : relative standard deviation of Vp along a bed, in [0, 0.2] (density
-        varies a quarter as much); default 0.15.
+        varies a quarter as much); default 0.03. In the time domain it shifts each trace's
+        two-way time from its neighbour's (docs/seismic.md).
+    lateral_density_amplitude : relative standard deviation of density along a bed, in
+        [0, 0.2], added to the quarter of ``lateral_amplitude`` and following the same field:
+        the impedance, and so the reflector's strength, varies along the bed while the travel
+        time does not; default 0.
     lateral_correlation_m : correlation length (m) of the variation along a bed, in
-        [1, 1e6]; default 80. With 0.15 it gives an adjacent-trace correlation near F3's 0.92
-        (35 Hz, 4 ms, 25 m traces; see docs/seismic.md).
+        [1, 1e6]; default 27.
     boundary_undulation : standard deviation of a bed boundary's vertical displacement as a
         fraction of the thinner adjacent bed, in [0, 0.17] (below 1 / (2 sqrt(2 N_MODES)), so
         boundaries never cross); default 0.1.
@@ -110,6 +115,7 @@ class BedModel:
     vp_gradient_per_km: float = PARAMS["vp_gradient_per_km"].default
     rho_gradient_per_km: float = PARAMS["rho_gradient_per_km"].default
     lateral_amplitude: float = PARAMS["lateral_amplitude"].default
+    lateral_density_amplitude: float = PARAMS["lateral_density_amplitude"].default
     lateral_correlation_m: float = PARAMS["lateral_correlation_m"].default
     boundary_undulation: float = PARAMS["boundary_undulation"].default
     undulation_correlation_m: float = PARAMS["undulation_correlation_m"].default
@@ -322,7 +328,8 @@ def draw_strata(unit_bottom_m, unit_top_m, layer_props: LayerProperties, width_m
         unit_first_bed=np.asarray(first, dtype=np.int64), bed_bottom_m=cat["bottom"],
         bed_top_m=cat["top"], facies=cat["facies"], vp_m_s=cat["vp"], rho_kg_m3=cat["rho"],
         lateral_amplitude_vp=float(model.lateral_amplitude),
-        lateral_amplitude_rho=float(_RHO_LATERAL * model.lateral_amplitude),
+        lateral_amplitude_rho=float(_RHO_LATERAL * model.lateral_amplitude
+                                    + model.lateral_density_amplitude),
         lateral=cat["lat"], undulation=cat["und"], dx_m=float(dx), width_m=float(width_m),
     )
 

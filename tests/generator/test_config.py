@@ -157,7 +157,7 @@ def test_generate_help_names_every_preset_and_every_file_is_a_preset(capsys):
 
 
 @pytest.mark.parametrize("raw, message", [
-    ({"sweep": {"dip_degs": 50}}, "sweep.dip_degs: unknown key; did you mean 'dip_deg'? (78 keys"),
+    ({"sweep": {"dip_degs": 50}}, "sweep.dip_degs: unknown key; did you mean 'dip_deg'? (79 keys"),
     ({"sweep": {"engine": "dem"}}, "sweep.engine: unknown key; it belongs in [model] ("),
     ({"model": {"widht_m": 100.0}}, "model.widht_m: unknown key; did you mean 'width_m'?; allowed "
                                     "keys are engine, height_m,"),

@@ -106,6 +106,29 @@ def test_continuous_along_a_bed_with_lateral_variation():
     assert rel.max() < 0.01                                  # ... without jumps
 
 
+def test_density_variation_along_a_bed_keeps_vp_and_the_draws():
+    """lateral_density_amplitude varies density along a bed by that relative std, on the field
+    Vp would follow, and leaves Vp (so the travel times) and every draw as they were."""
+    base = BedModel(lateral_amplitude=0.0, boundary_undulation=0.0)
+    dens = dataclasses.replace(base, lateral_density_amplitude=0.1)
+    s0, s1 = (draw_strata([0.0], [400.0], _props(1), 20000.0, m, np.random.default_rng(6))
+              for m in (base, dens))
+    np.testing.assert_array_equal(s0.lateral, s1.lateral)
+    np.testing.assert_array_equal(s0.rho_kg_m3, s1.rho_kg_m3)
+    yc = 0.5 * (s1.bed_bottom_m + s1.bed_top_m)
+    x = np.linspace(0.0, 20000.0, 2001)
+    xx, yy = np.broadcast_to(x, (yc.size, x.size)), np.broadcast_to(yc[:, None], (yc.size, x.size))
+    vp0, rho0 = strata_properties(s0, xx, yy)
+    vp1, rho1 = strata_properties(s1, xx, yy)
+    np.testing.assert_array_equal(vp1, vp0)                  # no time shift
+    np.testing.assert_array_equal(rho0, np.broadcast_to(s0.rho_kg_m3[:, None], rho0.shape))
+    rel = rho1 / s1.rho_kg_m3[:, None] - 1.0
+    x_tab = np.arange(s1.lateral.shape[1]) * s1.dx_m
+    f = np.array([np.interp(x, x_tab, row) for row in s1.lateral])
+    np.testing.assert_allclose(rel, 0.1 * f, atol=1e-12)
+    assert np.std(rel) == pytest.approx(0.1, rel=0.15)       # unit-variance fields
+
+
 def _two_way_times(model: BedModel, depth_m: float, seed: int) -> np.ndarray:
     """Two-way time (s) from the top of a flat 1200 m pile down to ``depth_m`` below it, at
     traces 25 m apart over 5 km: the sum of 2 dz / Vp over 0.25 m steps."""
