@@ -575,7 +575,8 @@ BED_FIELDS: tuple[str, ...] = (
     "bed_thickness_median_m", "bed_thickness_log_sigma", "bed_thickness_min_m",
     "bed_thickness_max_m", "facies_contrast", "facies_switch_probability", "fluctuation_sigma",
     "fluctuation_ar1", "vp_gradient_per_km", "rho_gradient_per_km", "lateral_amplitude",
-    "lateral_density_amplitude", "lateral_correlation_m", "boundary_undulation", "undulation_correlation_m")
+    "lateral_density_amplitude", "lateral_correlation_m", "boundary_undulation",
+    "undulation_correlation_m")
 
 #: scalar fields of :class:`demseis.seismic.PropertyModel` (the same names)
 PROPERTY_FIELDS: tuple[str, ...] = ("gardner_a", "gardner_b", "vp_scatter", "rho_scatter",

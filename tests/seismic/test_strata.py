@@ -117,7 +117,8 @@ def test_density_variation_along_a_bed_keeps_vp_and_the_draws():
     np.testing.assert_array_equal(s0.rho_kg_m3, s1.rho_kg_m3)
     yc = 0.5 * (s1.bed_bottom_m + s1.bed_top_m)
     x = np.linspace(0.0, 20000.0, 2001)
-    xx, yy = np.broadcast_to(x, (yc.size, x.size)), np.broadcast_to(yc[:, None], (yc.size, x.size))
+    xx = np.broadcast_to(x, (yc.size, x.size))
+    yy = np.broadcast_to(yc[:, None], xx.shape)
     vp0, rho0 = strata_properties(s0, xx, yy)
     vp1, rho1 = strata_properties(s1, xx, yy)
     np.testing.assert_array_equal(vp1, vp0)                  # no time shift
