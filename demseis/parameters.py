@@ -452,6 +452,13 @@ _DECLARED: tuple[Param, ...] = (
        doc="elements: rock properties per DEM element, rasterised on the grid (the paper's "
            "mode); strata: a fine stratigraphy (beds below 1 m to tens of metres) looked up at "
            "each point's reference coordinates (demseis.generator.render.survey, docs/seismic.md)"),
+    _p("velocity_median_m", float, "sweep", 0.0, 0.0, 1.0e4, unit="m", section="output",
+       doc="strata rendering: two-way times from the running median of Vp over this width "
+           "along the section, the impedance kept (demseis.generator.render.survey."
+           "smooth_velocity): pits and bumps of a few elements at the surface and narrow "
+           "columns of slow sediment between elements would otherwise shift single traces "
+           "by up to a few samples against their neighbours (statics that break every "
+           "reflector below them); 0 = every trace's own velocity"),
     _p("strata_dz_m", float, "sweep", 1.0, 0.05, 1.0, unit="m", section="output",
        doc="strata rendering: vertical step of the stratigraphy lookup, at most (the grid cell "
            "is split into an odd number of steps no larger)"),

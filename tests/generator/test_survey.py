@@ -9,7 +9,7 @@ from demseis.generator.config.layout import on_grid, sample_shape, trace_spacing
 from demseis.generator.config.settings import parse_config
 from demseis.generator.render.survey import (damage_factor, fill_gaps, fine_depths,
                                              hold_small_steps, labels_at_traces, reference_points,
-                                             substeps)
+                                             smooth_velocity, substeps, velocity_window)
 from demseis.seismic import coarse_velocity, interface_times
 
 
@@ -163,3 +163,56 @@ def test_rock_time_window_is_the_height_at_the_fastest_vp_and_every_column_fills
         "dip 60°, throw so far 50 m, base shortened by 10.0 %"
     with pytest.raises(ConfigError, match="time_window"):
         _cfg(domain="time", time_window="survey")
+
+
+def _running_median(v: np.ndarray, window: int) -> np.ndarray:
+    """The slow, obvious running median along each row, edges repeated."""
+    h = window // 2
+    pad = np.concatenate([np.repeat(v[:, :1], h, axis=1), v, np.repeat(v[:, -1:], h, axis=1)],
+                         axis=1)
+    return np.stack([np.median(pad[:, j:j + window], axis=1) for j in range(v.shape[1])],
+                    axis=1)
+
+
+def test_velocity_window_is_an_odd_count_of_traces():
+    assert velocity_window(_cfg()) == 1                                    # 0: off
+    assert velocity_window(_cfg(trace_spacing_m=25.0, velocity_median_m=200.0)) == 9
+    assert velocity_window(_cfg(trace_spacing_m=25.0, velocity_median_m=225.0)) == 9
+    assert velocity_window(_cfg(velocity_median_m=100.0)) == 11           # 10 m grid columns
+    assert velocity_window(_cfg(trace_spacing_m=25.0, velocity_median_m=5.0)) == 1
+
+
+def test_smoothed_velocity_is_a_running_median_that_keeps_the_impedance():
+    rng = np.random.default_rng(3)
+    vp = rng.uniform(1800.0, 3000.0, (60, 23))
+    rho = rng.uniform(2000.0, 2500.0, (60, 23))
+    v, r = smooth_velocity(vp, rho, 5)
+    np.testing.assert_array_equal(v, _running_median(vp, 5))
+    np.testing.assert_allclose(v * r, vp * rho, rtol=1e-15)
+    same_v, same_r = smooth_velocity(vp, rho, 1)
+    assert same_v is vp and same_r is rho
+
+
+def test_a_narrow_slow_column_shifts_no_trace_and_a_wide_block_does():
+    """Flat beds (1 m rows); trace 10 holds a 60 m column of slow fill at the top (a pit
+    between elements), traces 20-39 are 10 % slower throughout (a wide block). Without the
+    median, trace 10's times below the pit are late by 2 * 60 m * (1/1800 - 1/v); with it they
+    equal its neighbours'. The wide block keeps its own times away from its edge."""
+    nz, nx = 300, 40
+    beds = 2000.0 + 400.0 * ((np.arange(nz) // 7) % 3)
+    vp = np.repeat(beds[:, None], nx, axis=1)
+    vp[:, 20:] *= 0.9
+    slow = vp.copy()
+    slow[:60, 10] = 1800.0
+    rho = np.full_like(vp, 2200.0)
+    t_raw = interface_times(slow, 1.0)[0]
+    late = 2.0 * np.sum(1.0 / 1800.0 - 1.0 / vp[:60, 10])
+    assert t_raw[-1, 10] - t_raw[-1, 9] == pytest.approx(late, rel=1e-9)
+    assert late > 0.008                                        # two samples at 4 ms
+    v, r = smooth_velocity(slow, rho, 5)
+    t = interface_times(v, 1.0)[0]
+    np.testing.assert_allclose(t[:, 8:13], np.repeat(t[:, 9:10], 5, axis=1), rtol=1e-12)
+    t_block = interface_times(vp, 1.0)[0]
+    np.testing.assert_allclose(t[:, 24:], t_block[:, 24:], rtol=1e-12)
+    np.testing.assert_allclose(t[:, :8], t_block[:, :8], rtol=1e-12)
+    np.testing.assert_allclose(v * r, slow * rho, rtol=1e-15)   # the reflections are the rock's

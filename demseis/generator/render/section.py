@@ -25,7 +25,8 @@ from demseis.generator.engines import Engine, EngineRun, State
 from demseis.generator.engines.runsetup import property_model_of
 from demseis.generator.render.survey import (damage_factor, fill_gaps, fine_depths,
                                              hold_small_steps, labels_at_traces, nearest_columns,
-                                             reference_points, substeps, to_time)
+                                             reference_points, smooth_velocity, substeps, to_time,
+                                             velocity_window)
 from demseis.labels import pick_faults, sample_facts, throw_samples
 from demseis.labels.offsets import (jumps_to_samples, offset_disagreement, offset_faults,
                                     pair_jumps, window_max)
@@ -317,8 +318,9 @@ def _strata_columns(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
         vp, rho = vp * f, rho * f
     floor = property_model_of(cfg, dict(params)).vp_lower_bound_m_s
     vp = np.maximum(vp, floor)
-    vp_cell = coarse_velocity(vp, n)
     impedance = (vp * rho).reshape(grid.nz, n, -1).mean(axis=1)
+    vp, rho = smooth_velocity(vp, rho, velocity_window(cfg))
+    vp_cell = coarse_velocity(vp, n)
     y0_cell = np.where(rock, y0, np.nan).reshape(grid.nz, n, -1)[:, n // 2]
     return ImagingInput(vp, rho, grid.cell_m / n, trace_spacing(cfg), n, vp_cell, impedance,
                         y0_cell)

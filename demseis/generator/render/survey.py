@@ -149,6 +149,35 @@ def fine_depths(cfg: Config, nz: int) -> np.ndarray:
     return (np.arange(nz * n) + 0.5) * dz
 
 
+def velocity_window(cfg: Config) -> int:
+    """``[output] velocity_median_m`` in traces: an odd count, 1 (no smoothing) for 0."""
+    w = float(cfg.output.velocity_median_m)
+    if w <= 0:
+        return 1
+    n = max(1, int(round(w / trace_spacing(cfg))))
+    return n if n % 2 else n + 1
+
+
+def smooth_velocity(vp: np.ndarray, rho: np.ndarray, window: int) -> tuple[np.ndarray, np.ndarray]:
+    """The velocity that takes the strata points to two-way time, as the running median of
+    ``vp`` over ``window`` traces along each row (``scipy.ndimage.median_filter``, edges
+    repeated), and the density that keeps every point's impedance ``vp * rho``.
+
+    The reflectivity depends on the impedance only, so the section's reflections are those of
+    the rock; their times follow the laterally smoothed velocity. Pits and bumps of a few
+    elements at the surface, and narrow columns of slow sediment between elements, then shift
+    no trace against its neighbours (a wavefront heals over features narrower than its Fresnel
+    zone), while a change of velocity wider than half the window (a fault block, a basin's
+    fill) still shifts the times below it. ``window`` 1 returns the arrays as they are.
+    """
+    if window <= 1:
+        return vp, rho
+    from scipy.ndimage import median_filter
+
+    v = median_filter(vp, size=(1, int(window)), mode="nearest")
+    return v, vp * rho / v
+
+
 def fill_gaps(values: np.ndarray) -> np.ndarray:
     """``values`` (rows, cols) with NaN (no rock) filled.
 
