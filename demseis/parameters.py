@@ -452,6 +452,18 @@ _DECLARED: tuple[Param, ...] = (
        doc="elements: rock properties per DEM element, rasterised on the grid (the paper's "
            "mode); strata: a fine stratigraphy (beds below 1 m to tens of metres) looked up at "
            "each point's reference coordinates (demseis.generator.render.survey, docs/seismic.md)"),
+    _p("block_smoothing_m", float, "sweep", 0.0, 0.0, 1000.0, unit="m", section="output",
+       doc="dem engine, strata rendering: 0 = each point follows its own element's map (every "
+           "element's motion, granular rearrangement and slip between small blocks included; "
+           "docs/dem.md, \"Reference coordinates\"); > 0 = the elements' displacement smoothed "
+           "over this radius within the blocks the fault label bounds, so that the beds break "
+           "only at labelled faults (demseis.dem.reference.block_reference_map)"),
+    _p("surface_median_m", float, "sweep", 0.0, 0.0, 1.0e4, unit="m", section="output",
+       doc="strata rendering: the top of the rock levelled by a running median over this "
+           "width before the space above it is filled (demseis.generator.render.survey."
+           "level_surface): the bumps and pits of a few elements would otherwise make the "
+           "surface a rough, broken reflector; a fault scarp wider than half of it is kept; "
+           "0 = the surface as the elements leave it"),
     _p("velocity_median_m", float, "sweep", 0.0, 0.0, 1.0e4, unit="m", section="output",
        doc="strata rendering: two-way times from the running median of Vp over this width "
            "along the section, the impedance kept (demseis.generator.render.survey."

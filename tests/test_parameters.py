@@ -176,6 +176,7 @@ GENERATOR_ONLY = {"seed", "n_runs", "renders_per_snapshot", "fault_x_frac", "n_l
                   "planar_tilt_deg",
                   # survey sampling and the strata rendering (demseis.generator.render.survey)
                   "trace_spacing_m", "strata_dz_m", "fault_zone_impedance", "velocity_median_m",
+                  "surface_median_m", "block_smoothing_m",
                   # the DEM engine's library of settled packs (demseis.generator.engines.dem)
                   "pack_library"}
 NUMERIC = sorted(k for k, p in PARAMS.items() if p.kind in (int, float))

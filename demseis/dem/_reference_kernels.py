@@ -369,3 +369,210 @@ def blend_maps(cur_x, cur_y, radius, group, maps, x0, y0, cell, ncx, ncy, start,
         else:
             out_ref[q, 0] = fe_x
             out_ref[q, 1] = fe_y
+
+
+@njit(cache=True)
+def crosses_barrier(ax, ay, bx, by, barrier, bx0, btop, bcell):
+    """Whether the segment a -> b passes through a set cell of ``barrier`` (rows down from
+    ``btop``, columns right from ``bx0``, square cells of ``bcell``), not counting a's cell.
+
+    Every cell the segment passes through is visited (a grid traversal, Amanatides & Woo
+    1987), so an 8-connected line of one-cell width is never stepped over diagonally (except
+    by a segment through a cell corner exactly). The part of the segment outside the raster
+    crosses nothing.
+    """
+    nz = barrier.shape[0]
+    nx = barrier.shape[1]
+    # grid coordinates: u along columns, v along rows (down)
+    ua = (ax - bx0) / bcell
+    va = (btop - ay) / bcell
+    ub = (bx - bx0) / bcell
+    vb = (btop - by) / bcell
+    i = int(np.floor(va))
+    j = int(np.floor(ua))
+    i1 = int(np.floor(vb))
+    j1 = int(np.floor(ub))
+    du = ub - ua
+    dv = vb - va
+    sj = 1 if du > 0 else -1
+    si = 1 if dv > 0 else -1
+    if du != 0.0:
+        nxt = (j + 1.0) if du > 0 else float(j)
+        tmu = (nxt - ua) / du
+        tdu = abs(1.0 / du)
+    else:
+        tmu = np.inf
+        tdu = np.inf
+    if dv != 0.0:
+        nxt = (i + 1.0) if dv > 0 else float(i)
+        tmv = (nxt - va) / dv
+        tdv = abs(1.0 / dv)
+    else:
+        tmv = np.inf
+        tdv = np.inf
+    nsteps = abs(i1 - i) + abs(j1 - j)
+    for _ in range(nsteps):
+        if tmu < tmv:
+            j += sj
+            tmu += tdu
+        else:
+            i += si
+            tmv += tdv
+        if 0 <= i < nz and 0 <= j < nx and barrier[i, j]:
+            return True
+    return False
+
+
+@njit(cache=True)
+def blend_blocks(cur_x, cur_y, ref_x, ref_y, radius, group, x0, y0, cell, ncx, ncy, start,
+                 items, px, py, reach, smooth, barrier, band, bx0, btop, bcell, out_ref,
+                 out_elem):
+    """Reference coordinates of points from the elements' displacements, smoothed within the
+    blocks that a barrier raster (the labelled faults) bounds.
+
+    For a point p the owner e is found as in :func:`blend_maps`. The displacement at p is a
+    moving least-squares fit, linear in x and y, of the displacements ``cur_j - ref_j`` of the
+    elements j of e's group with |p - x_j| < ``smooth``, weighted by Wendland(|p - x_j| /
+    ``smooth``), among those whose centre is not in a ``band`` cell (the barriers and the
+    rock beside them, whose slip is spread over a few elements) and that p reaches without
+    crossing a barrier cell (:func:`crosses_barrier`); a mean where fewer than 3 such elements
+    or their
+    spread is degenerate, e's own displacement where none. The result is p minus it: the rock
+    between barriers deforms smoothly at the scale ``smooth``, and only the barriers make jumps.
+
+    Parameters
+    ----------
+    cur_x, cur_y, ref_x, ref_y, radius : (n,) float64 element centres now and in the reference
+        frame, radii (m).
+    group : (n,) int64 element groups (birth cohorts); other groups than e's never take part.
+    x0, y0, cell, ncx, ncy, start, items : cell list of the centres with ``cell >= smooth``
+        and ``cell >= reach * max(radius)``.
+    px, py : (m,) float64 query points (m).
+    reach : a point's owner lies within ``reach`` radii of it.
+    smooth : smoothing radius (m).
+    barrier : (nz, nx) uint8 raster, non-zero on the barriers; bx0, btop, bcell its left edge,
+        top edge (elevation) and cell size (m).
+    band : (nz, nx) uint8 raster on the same grid, non-zero where elements take no part (the
+        barrier cells at least).
+    out_ref : (m, 2) float64, written: reference coordinates; NaN where no element reaches.
+    out_elem : (m,) int64, written: owner e; -1 where no element reaches.
+    """
+    nz = barrier.shape[0]
+    nx = barrier.shape[1]
+    for q in range(px.shape[0]):
+        p_x = px[q]
+        p_y = py[q]
+        gx = int(np.floor((p_x - x0) / cell))
+        gy = int(np.floor((p_y - y0) / cell))
+        gx0 = max(gx - 1, 0)
+        gx1 = min(gx + 1, ncx - 1)
+        gy0 = max(gy - 1, 0)
+        gy1 = min(gy + 1, ncy - 1)
+        e = -1
+        best = np.inf
+        for by in range(gy0, gy1 + 1):
+            for bx in range(gx0, gx1 + 1):
+                c = by * ncx + bx
+                for s in range(start[c], start[c + 1]):
+                    j = items[s]
+                    dx = p_x - cur_x[j]
+                    dy = p_y - cur_y[j]
+                    d2 = dx * dx + dy * dy
+                    rr = reach * radius[j]
+                    if d2 > rr * rr:
+                        continue
+                    pw = d2 - radius[j] * radius[j]
+                    if pw < best or (pw == best and j < e):
+                        best = pw
+                        e = j
+        out_elem[q] = e
+        if e < 0:
+            out_ref[q, 0] = np.nan
+            out_ref[q, 1] = np.nan
+            continue
+        # weighted sums for u(x) = u0 + G (x - p), over x relative to p
+        sw = 0.0
+        sx = 0.0
+        sy = 0.0
+        sxx = 0.0
+        sxy = 0.0
+        syy = 0.0
+        su0 = 0.0
+        sux = 0.0
+        suy = 0.0
+        sv0 = 0.0
+        svx = 0.0
+        svy = 0.0
+        cnt = 0
+        for by in range(gy0, gy1 + 1):
+            for bx in range(gx0, gx1 + 1):
+                c = by * ncx + bx
+                for s in range(start[c], start[c + 1]):
+                    j = items[s]
+                    if group[j] != group[e]:
+                        continue
+                    dx = cur_x[j] - p_x
+                    dy = cur_y[j] - p_y
+                    d = np.sqrt(dx * dx + dy * dy)
+                    if d >= smooth:
+                        continue
+                    ci = int(np.floor((btop - cur_y[j]) / bcell))
+                    cj = int(np.floor((cur_x[j] - bx0) / bcell))
+                    if 0 <= ci < nz and 0 <= cj < nx and band[ci, cj]:
+                        continue
+                    if crosses_barrier(p_x, p_y, cur_x[j], cur_y[j], barrier, bx0, btop,
+                                       bcell):
+                        continue
+                    w = wendland(d / smooth)
+                    if w <= 0.0:
+                        continue
+                    uj = cur_x[j] - ref_x[j]
+                    vj = cur_y[j] - ref_y[j]
+                    sw += w
+                    sx += w * dx
+                    sy += w * dy
+                    sxx += w * dx * dx
+                    sxy += w * dx * dy
+                    syy += w * dy * dy
+                    su0 += w * uj
+                    sux += w * uj * dx
+                    suy += w * uj * dy
+                    sv0 += w * vj
+                    svx += w * vj * dx
+                    svy += w * vj * dy
+                    cnt += 1
+        if cnt == 0:
+            out_ref[q, 0] = p_x - (cur_x[e] - ref_x[e])
+            out_ref[q, 1] = p_y - (cur_y[e] - ref_y[e])
+            continue
+        u = su0 / sw
+        v = sv0 / sw
+        if cnt >= 3:
+            # central second moments: a well-spread cloud gets the linear fit
+            mx = sx / sw
+            my = sy / sw
+            cxx = sxx / sw - mx * mx
+            cxy = sxy / sw - mx * my
+            cyy = syy / sw - my * my
+            tr = cxx + cyy
+            det = cxx * cyy - cxy * cxy
+            disc = np.sqrt(max(0.25 * tr * tr - det, 0.0))
+            emin = 0.5 * tr - disc
+            emax = 0.5 * tr + disc
+            if emax > 0.0 and emin >= 0.05 * emax:
+                # solve [[sw sx sy] [sx sxx sxy] [sy sxy syy]] [a0 ax ay] = rhs for u and v
+                m00 = sw
+                m01 = sx
+                m02 = sy
+                m11 = sxx
+                m12 = sxy
+                m22 = syy
+                c00 = m11 * m22 - m12 * m12
+                c01 = m02 * m12 - m01 * m22
+                c02 = m01 * m12 - m02 * m11
+                dt = m00 * c00 + m01 * c01 + m02 * c02
+                if dt != 0.0:
+                    u = (c00 * su0 + c01 * sux + c02 * suy) / dt
+                    v = (c00 * sv0 + c01 * svx + c02 * svy) / dt
+        out_ref[q, 0] = p_x - u
+        out_ref[q, 1] = p_y - v

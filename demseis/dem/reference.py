@@ -37,6 +37,7 @@ import numpy as np
 from demseis.dem import _reference_kernels as _k
 from demseis.errors import InputError
 from demseis.labels import build_cell_list, displacement_history, neighbour_lists
+from demseis.types import Grid
 
 #: default fit radius, in multiples of the largest element radius
 FIT_RADIUS_FACTOR = 2.5
@@ -272,6 +273,13 @@ def reference_map(snapshots: Sequence, k: int, points_xy: np.ndarray, *,
     ref, owner = reference_coordinates(cur, s.radius, maps, points_xy, group=birth,
                                        reach=reach, support=support, agree_tol_m=agree_tol_m,
                                        return_element=True)
+    return _with_units(s, birth, ref, owner)
+
+
+def _with_units(s, birth: np.ndarray, ref: np.ndarray, owner: np.ndarray) -> ReferenceMap:
+    """The :class:`ReferenceMap` of points with reference ``ref`` and owners ``owner`` in
+    snapshot ``s`` (elements' birth positions ``birth``)."""
+    cur = np.asarray(s.xy, dtype=np.float64)
     inside = owner >= 0
     o = np.where(inside, owner, 0)
     n_el = cur.shape[0]
@@ -279,3 +287,78 @@ def reference_map(snapshots: Sequence, k: int, points_xy: np.ndarray, *,
     dep = inside & (np.asarray(s.deposited, dtype=bool)[o] if n_el else False)
     bth = np.where(inside, birth[o] if n_el else 0, -1).astype(np.int64)
     return ReferenceMap(ref_xy=ref, element=owner, layer=layer, deposited=dep, birth=bth)
+
+
+def block_reference_map(snapshots: Sequence, k: int, points_xy: np.ndarray,
+                        barrier: np.ndarray, barrier_grid: Grid, smooth_m: float, *,
+                        band_m: float = 0.0, reach: float = 1.5,
+                        displacement: tuple[np.ndarray, np.ndarray] | None = None
+                        ) -> ReferenceMap:
+    """Reference coordinates of points of snapshot ``k``, smooth between the barriers.
+
+    Where :func:`reference_map` follows every element's own motion (granular rearrangement
+    and slip between small blocks included), this map follows the run's motion at the scale
+    ``smooth_m`` and cuts it only at ``barrier`` (the labelled faults): the displacement at a
+    point is a moving least-squares fit, linear in x and y, of the displacements of the
+    elements of its owner's cohort within ``smooth_m`` that it reaches without crossing a
+    barrier cell (Numba ``blend_blocks``). Rock between the barriers folds, tilts and drags
+    with the run, and every jump of the beds lies on a barrier. Owners, layers and cohorts
+    are those of :func:`reference_map`.
+
+    Parameters
+    ----------
+    snapshots, k, points_xy, reach, displacement : as for :func:`reference_map`.
+    barrier : (nz, nx) raster on ``barrier_grid``, non-zero on the barriers (the fault label).
+    barrier_grid : :class:`demseis.types.Grid` of ``barrier``.
+    smooth_m : smoothing radius (m), > 0.
+    band_m : elements whose centre lies within this distance (m) of a barrier cell along the
+        section (the cells within ``round(band_m / cell)`` columns of it) take no part: where
+        the slip is spread over a zone a few elements wide, the rock on either side is
+        extrapolated up to the barrier, so the jump there is the whole slip across the zone.
+
+    Returns
+    -------
+    ReferenceMap
+    """
+    snaps = list(snapshots)
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) \
+            or not -len(snaps) <= k < len(snaps):
+        raise InputError(f"k = {k!r}; allowed: an integer index into {len(snaps)} snapshots")
+    k = int(k) % len(snaps)
+    b = np.asarray(barrier)
+    if b.shape != barrier_grid.shape:
+        raise InputError(f"barrier must have the shape of its grid {barrier_grid.shape}; got "
+                         f"{b.shape}")
+    smooth = _positive(smooth_m, "smooth_m", 1.0)
+    if isinstance(band_m, bool) or not isinstance(band_m, (int, float, np.integer, np.floating)) \
+            or not (np.isfinite(band_m) and band_m >= 0):
+        raise InputError(f"band_m = {band_m!r}; allowed: a finite number >= 0")
+    bar = np.ascontiguousarray(b != 0, dtype=np.uint8)
+    band = bar.copy()
+    for d in range(1, int(round(float(band_m) / float(barrier_grid.cell_m))) + 1):
+        band[:, d:] |= bar[:, :-d]
+        band[:, :-d] |= bar[:, d:]
+    reach = _positive(reach, "reach", 1.5)
+    if reach < 1.0:
+        raise InputError(f"reach = {reach}; allowed: >= 1")
+    disp, birth = (displacement if displacement is not None
+                   else displacement_history(snaps[: k + 1])[k])
+    s = snaps[k]
+    cur, r, g = _elements(s.xy, s.radius, birth)
+    ref_el = cur - np.asarray(disp, dtype=np.float64)
+    pts = _xy(points_xy, "points_xy")
+    m = pts.shape[0]
+    out = np.full((m, 2), np.nan)
+    owner = np.full(m, -1, dtype=np.int64)
+    if cur.shape[0] and m:
+        x = np.ascontiguousarray(cur[:, 0])
+        y = np.ascontiguousarray(cur[:, 1])
+        cell = max(smooth, reach * float(r.max()))
+        x0, y0, ncx, ncy, start, items = build_cell_list(x, y, cell)
+        _k.blend_blocks(x, y, np.ascontiguousarray(ref_el[:, 0]),
+                        np.ascontiguousarray(ref_el[:, 1]), r, g, x0, y0, cell, ncx, ncy,
+                        start, items, np.ascontiguousarray(pts[:, 0]),
+                        np.ascontiguousarray(pts[:, 1]), reach, smooth, bar, band,
+                        float(barrier_grid.x0_m), float(barrier_grid.top_m),
+                        float(barrier_grid.cell_m), out, owner)
+    return _with_units(s, birth, out, owner)

@@ -126,3 +126,25 @@ def test_psf_images_the_strata_at_the_traces(tmp_path, domain):
     last = np.flatnonzero(snap == snap.max())
     c, d = (root["seismic"][i] for i in last[:2])
     assert not np.allclose(c, d)
+
+
+def test_dem_block_rendering_changes_the_seismic_not_the_labels(tmp_path):
+    """`block_smoothing_m`, `surface_median_m` and `velocity_median_m` change how the DEM's
+    rock is drawn, not where its faults are: in depth (no velocity maps them to time) the
+    label arrays keep their bytes and the impedance its values where the surface is not
+    levelled."""
+    base = survey("dem", "strata").replace('domain = "time"', 'domain = "depth"')
+    keys = "block_smoothing_m = 100.0\nsurface_median_m = 100.0\nvelocity_median_m = 100.0\n"
+    stores = [generate_tiny(tmp_path, base, "plain"),
+              generate_tiny(tmp_path, base.replace("impedance = true\n",
+                                                   "impedance = true\n" + keys), "blocks")]
+    a, b = (zarr.open_group(str(p), mode="r") for p in stores)
+    assert a["seismic"].shape == b["seismic"].shape
+    assert not np.array_equal(a["seismic"][:], b["seismic"][:])
+    for name in ("fault", "damage", "fault_id", "slip_m"):
+        np.testing.assert_array_equal(a[name][:], b[name][:])
+    i = int(np.flatnonzero(params_of(a)["snapshot"] == 0)[0])
+    # the undeformed pack has moved nowhere: its smoothed displacement is zero as well, so
+    # below the (levelled) surface the impedance is the same
+    za, zb = a["impedance"][i], b["impedance"][i]
+    np.testing.assert_allclose(zb[10:], za[10:], rtol=1e-9)

@@ -8,8 +8,9 @@ import pytest
 from demseis.generator.config.layout import on_grid, sample_shape, trace_spacing, trace_x
 from demseis.generator.config.settings import parse_config
 from demseis.generator.render.survey import (damage_factor, fill_gaps, fine_depths,
-                                             hold_small_steps, labels_at_traces, reference_points,
-                                             smooth_velocity, substeps, velocity_window)
+                                             hold_small_steps, labels_at_traces, level_surface,
+                                             reference_points, smooth_velocity, substeps,
+                                             surface_window, velocity_window)
 from demseis.seismic import coarse_velocity, interface_times
 
 
@@ -216,3 +217,35 @@ def test_a_narrow_slow_column_shifts_no_trace_and_a_wide_block_does():
     np.testing.assert_allclose(t[:, 24:], t_block[:, 24:], rtol=1e-12)
     np.testing.assert_allclose(t[:, :8], t_block[:, :8], rtol=1e-12)
     np.testing.assert_allclose(v * r, slow * rho, rtol=1e-15)   # the reflections are the rock's
+
+
+def test_surface_window_follows_its_own_width():
+    assert surface_window(_cfg()) == 1
+    assert surface_window(_cfg(trace_spacing_m=25.0, surface_median_m=200.0)) == 9
+
+
+def test_levelled_surface_drops_bumps_fills_pits_and_keeps_a_scarp():
+    """Rock from row 10 on the left half and row 30 on the right (a scarp), one trace with a
+    bump of 4 rows and one with a pit of 5 rows: the bump becomes no rock, the pit takes its
+    trace's first rock values, the scarp stays where it is."""
+    nr, nc = 60, 24
+    first = np.where(np.arange(nc) < 12, 10, 30)
+    first[5] = 6                                               # a bump
+    first[18] = 35                                             # a pit
+    rows = np.arange(nr)[:, None]
+    rock = rows >= first[None, :]
+    vp = np.where(rock, 2000.0 + rows, np.nan)
+    rho = np.where(rock, 2200.0 + rows, np.nan)
+    level_surface(vp, rho, rock, 5)
+    top = np.argmax(np.isfinite(vp), axis=0)
+    want = np.where(np.arange(nc) < 12, 10, 30)
+    np.testing.assert_array_equal(top, want)
+    np.testing.assert_array_equal(vp[30:35, 18], 2035.0)       # the pit: the first rock's
+    np.testing.assert_array_equal(rho[30:35, 18], 2235.0)
+    np.testing.assert_array_equal(vp[10:, 5], 2000.0 + np.arange(10, nr))   # rock kept below
+    untouched = np.ones(nc, bool)
+    untouched[[5, 18]] = False
+    np.testing.assert_array_equal(np.isfinite(vp[:, untouched]), rock[:, untouched])
+    before = vp.copy()
+    level_surface(vp, rho, np.isfinite(vp), 1)                 # window 1: nothing changes
+    np.testing.assert_array_equal(vp, before)

@@ -24,9 +24,9 @@ from demseis.generator.config.settings import Config
 from demseis.generator.engines import Engine, EngineRun, State
 from demseis.generator.engines.runsetup import property_model_of
 from demseis.generator.render.survey import (damage_factor, fill_gaps, fine_depths,
-                                             hold_small_steps, labels_at_traces, nearest_columns,
-                                             reference_points, smooth_velocity, substeps, to_time,
-                                             velocity_window)
+                                             hold_small_steps, labels_at_traces, level_surface,
+                                             nearest_columns, reference_points, smooth_velocity,
+                                             substeps, surface_window, to_time, velocity_window)
 from demseis.labels import pick_faults, sample_facts, throw_samples
 from demseis.labels.offsets import (jumps_to_samples, offset_disagreement, offset_faults,
                                     pair_jumps, window_max)
@@ -310,6 +310,7 @@ def _strata_columns(cfg: Config, state: State, maps: Mapping[str, np.ndarray],
     if not whole:                                    # no rock: the nearest rock of the trace
         vp[~rock] = np.nan
         rho[~rock] = np.nan
+        level_surface(vp, rho, rock, surface_window(cfg))
         vp, rho = fill_gaps(vp), fill_gaps(rho)
     hold_small_steps(vp, rho)
     change = params.fault_zone_impedance

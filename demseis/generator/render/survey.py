@@ -40,6 +40,7 @@ import math
 from collections.abc import Callable, Mapping
 
 import numpy as np
+from scipy.ndimage import median_filter
 
 from demseis.generator.config.layout import grid_of, on_grid, trace_spacing, trace_x
 from demseis.generator.config.settings import Config
@@ -149,13 +150,55 @@ def fine_depths(cfg: Config, nz: int) -> np.ndarray:
     return (np.arange(nz * n) + 0.5) * dz
 
 
-def velocity_window(cfg: Config) -> int:
-    """``[output] velocity_median_m`` in traces: an odd count, 1 (no smoothing) for 0."""
-    w = float(cfg.output.velocity_median_m)
+def median_window(width_m: float, cfg: Config) -> int:
+    """A width (m) along the section in traces: an odd count, 1 (no filter) for 0."""
+    w = float(width_m)
     if w <= 0:
         return 1
     n = max(1, int(round(w / trace_spacing(cfg))))
     return n if n % 2 else n + 1
+
+
+def level_surface(vp: np.ndarray, rho: np.ndarray, rock: np.ndarray, window: int) -> None:
+    """In place: the top of the rock levelled by a running median over ``window`` traces.
+
+    The first rock row of each trace is replaced by the running median of the traces' first
+    rock rows (``scipy.ndimage.median_filter``, edges repeated). Rock above that row (a bump of
+    a few elements) becomes NaN, no rock, and the space between it and the trace's first rock
+    (a pit between elements) takes the first rock's values, as a gap inside the rock does. A
+    step wider than half the window (a fault scarp) is kept. A trace without rock, and every
+    trace when ``window`` is 1, is left as it is.
+
+    Parameters
+    ----------
+    vp, rho : (rows, traces) float64 properties of the strata points, NaN where no rock.
+    rock : (rows, traces) bool, where an element holds the point.
+    window : odd number of traces.
+    """
+    if window <= 1:
+        return
+    nr = rock.shape[0]
+    has = rock.any(axis=0)
+    first = np.where(has, np.argmax(rock, axis=0), nr)
+    level = median_filter(first, size=int(window), mode="nearest")
+    for c in np.flatnonzero(has):
+        top, lv = int(first[c]), int(level[c])
+        if lv > top:                        # a bump: no rock above the levelled surface
+            vp[:lv, c] = np.nan
+            rho[:lv, c] = np.nan
+        elif lv < top:                      # a pit: the first rock's values up to the level
+            vp[lv:top, c] = vp[top, c]
+            rho[lv:top, c] = rho[top, c]
+
+
+def velocity_window(cfg: Config) -> int:
+    """``[output] velocity_median_m`` in traces (:func:`median_window`)."""
+    return median_window(cfg.output.velocity_median_m, cfg)
+
+
+def surface_window(cfg: Config) -> int:
+    """``[output] surface_median_m`` in traces (:func:`median_window`)."""
+    return median_window(cfg.output.surface_median_m, cfg)
 
 
 def smooth_velocity(vp: np.ndarray, rho: np.ndarray, window: int) -> tuple[np.ndarray, np.ndarray]:
@@ -172,8 +215,6 @@ def smooth_velocity(vp: np.ndarray, rho: np.ndarray, window: int) -> tuple[np.nd
     """
     if window <= 1:
         return vp, rho
-    from scipy.ndimage import median_filter
-
     v = median_filter(vp, size=(1, int(window)), mode="nearest")
     return v, vp * rho / v
 
