@@ -277,6 +277,31 @@ def fit_element_maps(ref_x, ref_y, cur_x, cur_y, group, offsets, index, fit_radi
         out_kind[e] = kind
 
 
+@njit(cache=True, inline="always")
+def owner_of(cur_x, cur_y, radius, ncx, start, items, p_x, p_y, gx0, gx1, gy0, gy1, reach):
+    """The element of least power distance ``|p - x_j|^2 - r_j^2`` among those of cells
+    ``gx0..gx1`` x ``gy0..gy1`` of the cell list with ``|p - x_j| <= reach r_j`` (ties: the
+    lowest index); -1 where there is none."""
+    e = -1
+    best = np.inf
+    for by in range(gy0, gy1 + 1):
+        for bx in range(gx0, gx1 + 1):
+            c = by * ncx + bx
+            for s in range(start[c], start[c + 1]):
+                j = items[s]
+                dx = p_x - cur_x[j]
+                dy = p_y - cur_y[j]
+                d2 = dx * dx + dy * dy
+                rr = reach * radius[j]
+                if d2 > rr * rr:
+                    continue
+                pw = d2 - radius[j] * radius[j]
+                if pw < best or (pw == best and j < e):
+                    best = pw
+                    e = j
+    return e
+
+
 @njit(cache=True)
 def blend_maps(cur_x, cur_y, radius, group, maps, x0, y0, cell, ncx, ncy, start, items,
                px, py, reach, support, agree_tol, out_ref, out_elem):
@@ -310,23 +335,8 @@ def blend_maps(cur_x, cur_y, radius, group, maps, x0, y0, cell, ncx, ncy, start,
         gx1 = min(gx + 1, ncx - 1)
         gy0 = max(gy - 1, 0)
         gy1 = min(gy + 1, ncy - 1)
-        e = -1
-        best = np.inf
-        for by in range(gy0, gy1 + 1):
-            for bx in range(gx0, gx1 + 1):
-                c = by * ncx + bx
-                for s in range(start[c], start[c + 1]):
-                    j = items[s]
-                    dx = p_x - cur_x[j]
-                    dy = p_y - cur_y[j]
-                    d2 = dx * dx + dy * dy
-                    rr = reach * radius[j]
-                    if d2 > rr * rr:
-                        continue
-                    pw = d2 - radius[j] * radius[j]
-                    if pw < best or (pw == best and j < e):
-                        best = pw
-                        e = j
+        e = owner_of(cur_x, cur_y, radius, ncx, start, items, p_x, p_y, gx0, gx1, gy0, gy1,
+                     reach)
         out_elem[q] = e
         if e < 0:
             out_ref[q, 0] = np.nan
@@ -468,23 +478,8 @@ def blend_blocks(cur_x, cur_y, ref_x, ref_y, radius, group, x0, y0, cell, ncx, n
         gx1 = min(gx + 1, ncx - 1)
         gy0 = max(gy - 1, 0)
         gy1 = min(gy + 1, ncy - 1)
-        e = -1
-        best = np.inf
-        for by in range(gy0, gy1 + 1):
-            for bx in range(gx0, gx1 + 1):
-                c = by * ncx + bx
-                for s in range(start[c], start[c + 1]):
-                    j = items[s]
-                    dx = p_x - cur_x[j]
-                    dy = p_y - cur_y[j]
-                    d2 = dx * dx + dy * dy
-                    rr = reach * radius[j]
-                    if d2 > rr * rr:
-                        continue
-                    pw = d2 - radius[j] * radius[j]
-                    if pw < best or (pw == best and j < e):
-                        best = pw
-                        e = j
+        e = owner_of(cur_x, cur_y, radius, ncx, start, items, p_x, p_y, gx0, gx1, gy0, gy1,
+                     reach)
         out_elem[q] = e
         if e < 0:
             out_ref[q, 0] = np.nan

@@ -260,10 +260,7 @@ def reference_map(snapshots: Sequence, k: int, points_xy: np.ndarray, *,
     ReferenceMap
     """
     snaps = list(snapshots)
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) \
-            or not -len(snaps) <= k < len(snaps):
-        raise InputError(f"k = {k!r}; allowed: an integer index into {len(snaps)} snapshots")
-    k = int(k) % len(snaps)
+    k = _snapshot_index(k, len(snaps))
     disp, birth = (displacement if displacement is not None
                    else displacement_history(snaps[: k + 1])[k])
     s = snaps[k]
@@ -274,6 +271,13 @@ def reference_map(snapshots: Sequence, k: int, points_xy: np.ndarray, *,
                                        reach=reach, support=support, agree_tol_m=agree_tol_m,
                                        return_element=True)
     return _with_units(s, birth, ref, owner)
+
+
+def _snapshot_index(k, n: int) -> int:
+    """``k`` as an index into ``n`` snapshots (negative counts from the end)."""
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not -n <= k < n:
+        raise InputError(f"k = {k!r}; allowed: an integer index into {n} snapshots")
+    return int(k) % n
 
 
 def _with_units(s, birth: np.ndarray, ref: np.ndarray, owner: np.ndarray) -> ReferenceMap:
@@ -321,10 +325,7 @@ def block_reference_map(snapshots: Sequence, k: int, points_xy: np.ndarray,
     ReferenceMap
     """
     snaps = list(snapshots)
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) \
-            or not -len(snaps) <= k < len(snaps):
-        raise InputError(f"k = {k!r}; allowed: an integer index into {len(snaps)} snapshots")
-    k = int(k) % len(snaps)
+    k = _snapshot_index(k, len(snaps))
     b = np.asarray(barrier)
     if b.shape != barrier_grid.shape:
         raise InputError(f"barrier must have the shape of its grid {barrier_grid.shape}; got "
