@@ -452,8 +452,8 @@ def blend_blocks(cur_x, cur_y, ref_x, ref_y, radius, group, x0, y0, cell, ncx, n
 
     Parameters
     ----------
-    cur_x, cur_y, ref_x, ref_y, radius : (n,) float64 element centres now and in the reference
-        frame, radii (m).
+    cur_x, cur_y, ref_x, ref_y, radius : (n,) float64 element centres in the current and the
+        reference frame, radii (m).
     group : (n,) int64 element groups (birth cohorts); other groups than e's never take part.
     x0, y0, cell, ncx, ncy, start, items : cell list of the centres with ``cell >= smooth``
         and ``cell >= reach * max(radius)``.
