@@ -40,34 +40,29 @@ def pair_jumps(vp_cell: np.ndarray, cell_m: float, fault: np.ndarray) -> np.ndar
 
 def measure(store: Path, runs: int, windows: list[float]) -> list[dict]:
     """One result per window (see the module docstring)."""
-    from demseis.datasets import open_store, read_done_params, read_particles
+    from demseis.datasets import open_store, shard_status
     from demseis.generator.config.layout import grid_of
-    from demseis.generator.config.sampling import plan_run
-    from demseis.generator.config.settings import stored_config
-    from demseis.generator.engines import get_engine, run_from_particles
+    from demseis.generator.engines import get_engine
     from demseis.generator.render.section import imaging_input, renders_by_snapshot, state_maps
     from demseis.generator.render.survey import labels_at_traces
+    from demseis.generator.sweep.rerender import dem_attempts, output_config, stored_run
 
-    raw0 = dict(open_store(store).attrs)["config"]
-    done = read_done_params(store, ["run_id", "dem_attempt"]).values
-    attempt = {int(r): int(a) for r, a in zip(done["run_id"], done["dem_attempt"])}
-    todo = sorted(attempt)[:runs]
+    source = dict(open_store(store).attrs)["config"]
+    attempts = dem_attempts(store)
+    todo = [int(r) for r in np.flatnonzero(shard_status(store) == 1)[:runs]]
     out = []
     for w in windows:
-        raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in raw0.items()}
-        raw["output"] = {**raw.get("output", {}), "velocity_median_m": float(w)}
-        cfg = stored_config(raw, source="strata_statics")
+        cfg = output_config(source, {"velocity_median_m": float(w)})
         engine = get_engine(cfg.model.engine)
         cell = grid_of(cfg).cell_m
         dt = float(cfg.output.dt_s)
         jumps, flat = [], []
         t0 = time.perf_counter()
         for run in todo:
-            spec = plan_run(cfg, run)
-            res = run_from_particles(cfg, spec, read_particles(store, run), attempt[run])
-            for state in engine.states(cfg, res, [k for k, _ in renders_by_snapshot(spec)]):
+            res = stored_run(store, run, cfg, attempts)
+            for state in engine.states(cfg, res, [k for k, _ in renders_by_snapshot(res.spec)]):
                 maps = labels_at_traces(cfg, state_maps(state, {}))
-                img = imaging_input(cfg, state, maps, spec.params)
+                img = imaging_input(cfg, state, maps, res.spec.params)
                 j = pair_jumps(img.vp_cell, cell, maps["fault"])
                 jumps.append(j)
                 if state.snapshot == 0:

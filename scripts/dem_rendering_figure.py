@@ -22,11 +22,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from demseis.datasets import open_store, read_done_params, read_particles  # noqa: E402
-from demseis.generator.config.sampling import plan_run  # noqa: E402
-from demseis.generator.config.settings import stored_config  # noqa: E402
-from demseis.generator.engines import get_engine, run_from_particles  # noqa: E402
+from demseis.datasets import open_store  # noqa: E402
+from demseis.generator.engines import get_engine  # noqa: E402
 from demseis.generator.render.section import render_run  # noqa: E402
+from demseis.generator.sweep.rerender import dem_attempts, output_config, stored_run  # noqa: E402
 
 #: (title, [output] keys) of each column
 VARIANTS = (
@@ -39,13 +38,8 @@ VARIANTS = (
 
 def render(store: Path, run: int, keys: dict) -> dict:
     """The samples of ``run`` rendered again with ``keys`` in ``[output]``."""
-    raw = dict(open_store(store).attrs)["config"]
-    raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in raw.items()}
-    raw["output"] = {**raw.get("output", {}), **keys}
-    cfg = stored_config(raw, source="dem_rendering_figure")
-    done = read_done_params(store, ["run_id", "dem_attempt"]).values
-    attempt = {int(r): int(a) for r, a in zip(done["run_id"], done["dem_attempt"])}
-    res = run_from_particles(cfg, plan_run(cfg, run), read_particles(store, run), attempt[run])
+    cfg = output_config(dict(open_store(store).attrs)["config"], keys)
+    res = stored_run(store, run, cfg, dem_attempts(store))
     return render_run(cfg, res, get_engine(cfg.model.engine)).arrays
 
 

@@ -278,6 +278,15 @@ def fit_element_maps(ref_x, ref_y, cur_x, cur_y, group, offsets, index, fit_radi
 
 
 @njit(cache=True, inline="always")
+def cell_range(p_x, p_y, x0, y0, cell, ncx, ncy):
+    """The cells of a cell list (origin ``x0, y0``, size ``cell``, ``ncx`` x ``ncy``) around
+    the point's own: (gx0, gx1, gy0, gy1), inclusive and clipped to the list."""
+    gx = int(np.floor((p_x - x0) / cell))
+    gy = int(np.floor((p_y - y0) / cell))
+    return max(gx - 1, 0), min(gx + 1, ncx - 1), max(gy - 1, 0), min(gy + 1, ncy - 1)
+
+
+@njit(cache=True, inline="always")
 def owner_of(cur_x, cur_y, radius, ncx, start, items, p_x, p_y, gx0, gx1, gy0, gy1, reach):
     """The element of least power distance ``|p - x_j|^2 - r_j^2`` among those of cells
     ``gx0..gx1`` x ``gy0..gy1`` of the cell list with ``|p - x_j| <= reach r_j`` (ties: the
@@ -329,12 +338,7 @@ def blend_maps(cur_x, cur_y, radius, group, maps, x0, y0, cell, ncx, ncy, start,
     for q in range(px.shape[0]):
         p_x = px[q]
         p_y = py[q]
-        gx = int(np.floor((p_x - x0) / cell))
-        gy = int(np.floor((p_y - y0) / cell))
-        gx0 = max(gx - 1, 0)
-        gx1 = min(gx + 1, ncx - 1)
-        gy0 = max(gy - 1, 0)
-        gy1 = min(gy + 1, ncy - 1)
+        gx0, gx1, gy0, gy1 = cell_range(p_x, p_y, x0, y0, cell, ncx, ncy)
         e = owner_of(cur_x, cur_y, radius, ncx, start, items, p_x, p_y, gx0, gx1, gy0, gy1,
                      reach)
         out_elem[q] = e
@@ -446,9 +450,9 @@ def blend_blocks(cur_x, cur_y, ref_x, ref_y, radius, group, x0, y0, cell, ncx, n
     ``smooth``), among those whose centre is not in a ``band`` cell (the barriers and the
     rock beside them, whose slip is spread over a few elements) and that p reaches without
     crossing a barrier cell (:func:`crosses_barrier`); a mean where fewer than 3 such elements
-    or their
-    spread is degenerate, e's own displacement where none. The result is p minus it: the rock
-    between barriers deforms smoothly at the scale ``smooth``, and only the barriers make jumps.
+    or their spread is degenerate, e's own displacement where none. The result is p minus it:
+    the rock between barriers deforms smoothly at the scale ``smooth``, and only the barriers
+    make jumps.
 
     Parameters
     ----------
@@ -472,12 +476,7 @@ def blend_blocks(cur_x, cur_y, ref_x, ref_y, radius, group, x0, y0, cell, ncx, n
     for q in range(px.shape[0]):
         p_x = px[q]
         p_y = py[q]
-        gx = int(np.floor((p_x - x0) / cell))
-        gy = int(np.floor((p_y - y0) / cell))
-        gx0 = max(gx - 1, 0)
-        gx1 = min(gx + 1, ncx - 1)
-        gy0 = max(gy - 1, 0)
-        gy1 = min(gy + 1, ncy - 1)
+        gx0, gx1, gy0, gy1 = cell_range(p_x, p_y, x0, y0, cell, ncx, ncy)
         e = owner_of(cur_x, cur_y, radius, ncx, start, items, p_x, p_y, gx0, gx1, gy0, gy1,
                      reach)
         out_elem[q] = e

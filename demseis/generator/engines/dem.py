@@ -26,7 +26,7 @@ import numpy as np
 
 from demseis.dem import (Material, NormalFault, Pack, build_assembly, settle_pack, simulate,
                          time_step)
-from demseis.dem.reference import block_reference_map, reference_map
+from demseis.dem.reference import ReferenceMap, block_reference_map, reference_map
 from demseis.dem.strata import layer_materials
 from demseis.errors import ConfigError, SimulationError
 from demseis.generator.config.layout import grid_of
@@ -44,7 +44,7 @@ from demseis.parameters import MATERIAL_FIELDS, PARAMS
 from demseis.registry import LABEL_METHODS, RENDERINGS
 from demseis.seismic import (LayerProperties, Strata, draw_layer_properties, element_properties,
                              property_grids)
-from demseis.types import Grid, Snapshot
+from demseis.types import Snapshot
 
 #: ``--dry-run`` cost model, fitted to the seed-scale run measured by benchmarks/dem_seed.py
 #: (11,224 elements: 25.8 s faulting for ~45,900 steps, 15.7 s settling, one core)
@@ -210,11 +210,13 @@ class DemEngine:
                       **run.info.throws_at(k, len(snaps))}
             reference = None
             if strata is not None:
-                blocks = None
+                mapper = reference_map
                 if cfg.output.block_smoothing_m > 0:
-                    blocks = (labels["fault"], grid, float(cfg.output.block_smoothing_m),
-                              BLOCK_BAND_RADII * float(cfg.model.radius_max_m))
-                reference = partial(_reference, snaps, k, moves[k], grid.top_m, blocks=blocks)
+                    mapper = partial(block_reference_map, barrier=labels["fault"],
+                                     barrier_grid=grid,
+                                     smooth_m=float(cfg.output.block_smoothing_m),
+                                     band_m=BLOCK_BAND_RADII * float(cfg.model.radius_max_m))
+                reference = partial(_reference, snaps, k, moves[k], grid.top_m, mapper=mapper)
             yield State(snapshot=k, vp_m_s=vp_g, rho_kg_m3=rho_g, labels=labels, values=values,
                         reference=reference, strata=strata)
 
@@ -320,20 +322,16 @@ def dem_strata(cfg: Config, run: EngineRun, snaps: Sequence[Snapshot], props: La
 
 def _reference(snaps: Sequence[Snapshot], k: int, move: tuple[np.ndarray, np.ndarray],
                top_m: float, x_m: np.ndarray, depth_m: np.ndarray, *,
-               blocks: tuple[np.ndarray, Grid, float, float] | None = None
+               mapper: Callable[..., ReferenceMap] = reference_map
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:attr:`State.reference` of snapshot ``k`` (``move``: its displacement since each
-    element's first appearance, and that snapshot): :func:`demseis.dem.reference_map`, or with
-    ``blocks`` = (fault label, its grid, ``[output] block_smoothing_m``, band)
-    :func:`demseis.dem.reference.block_reference_map`; a point in a growth element is looked
-    up in that element's growth unit."""
+    element's first appearance, and that snapshot) by ``mapper``:
+    :func:`demseis.dem.reference_map`, or :func:`demseis.dem.reference.block_reference_map`
+    with the run's fault label bound (``[output] block_smoothing_m``); a point in a growth
+    element is looked up in that element's growth unit."""
     x = np.asarray(x_m, dtype=np.float64)
     pts = np.stack([x.ravel(), top_m - np.asarray(depth_m, dtype=np.float64).ravel()], axis=1)
-    if blocks is None:
-        ref = reference_map(snaps, k, pts, displacement=move)
-    else:
-        ref = block_reference_map(snaps, k, pts, blocks[0], blocks[1], blocks[2],
-                                  band_m=blocks[3], displacement=move)
+    ref = mapper(snaps, k, pts, displacement=move)
     unit = np.where(ref.deposited, ref.layer.astype(np.int64), -1).reshape(x.shape)
     return ref.ref_xy[:, 0].reshape(x.shape), ref.ref_xy[:, 1].reshape(x.shape), unit
 

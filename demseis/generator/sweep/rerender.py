@@ -15,10 +15,15 @@ from demseis.datasets import (finalize_store, open_store, read_done_params, read
 from demseis.errors import StoreError
 from demseis.generator.config.sampling import plan_run
 from demseis.generator.config.settings import Config, stored_config
-from demseis.generator.engines import get_engine, require_particles, run_from_particles
+from demseis.generator.engines import EngineRun, get_engine, require_particles, run_from_particles
 from demseis.generator.render.section import render_run
 from demseis.generator.sweep.driver import SweepSummary, _progress_bar, prepare_store
 from demseis.labels import LabelConfig
+
+
+def _copied(source_cfg: dict[str, Any]) -> dict[str, Any]:
+    """A copy of a stored config whose tables can be replaced without touching the source."""
+    return {k: (dict(v) if isinstance(v, dict) else v) for k, v in source_cfg.items()}
 
 
 def rerender_config(source_cfg: dict[str, Any], freqs_hz: list[float], snrs_db: list[float],
@@ -30,7 +35,7 @@ def rerender_config(source_cfg: dict[str, Any], freqs_hz: list[float], snrs_db: 
     ``imaging``, ``psf_max_angles_deg`` and ``psf_aperture_m`` replace the source's values
     when given (lists become grids: every snapshot is rendered at each); None keeps them.
     """
-    raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in source_cfg.items()}
+    raw = _copied(source_cfg)
     raw["sweep"] = dict(raw["sweep"])
     raw["sweep"]["freq_hz"] = [f for f in freqs_hz]
     raw["sweep"]["snr_db"] = ["inf" if math.isinf(s) else s for s in snrs_db]
@@ -72,10 +77,19 @@ def _rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snr
 def relabel_config(source_cfg: dict[str, Any], labels: dict[str, Any]) -> Config:
     """The source config with its ``[labels]`` table replaced (everything else unchanged, so
     the same runs, renders and noise seeds give byte-identical seismic)."""
-    raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in source_cfg.items()}
+    raw = _copied(source_cfg)
     # keys not given take today's defaults (the picked fault target), not the source's
     raw["labels"] = {"fault_style": LabelConfig().fault_style, **labels}
     return stored_config(raw, source="relabel config")
+
+
+def output_config(source_cfg: dict[str, Any], output: dict[str, Any]) -> Config:
+    """The source config with the ``[output]`` keys of ``output`` replaced (the others, and
+    every other table, unchanged): the same runs drawn another way (``velocity_median_m``,
+    ``block_smoothing_m`` ...)."""
+    raw = _copied(source_cfg)
+    raw["output"] = {**raw.get("output", {}), **output}
+    return stored_config(raw, source="output config")
 
 
 def relabel(source: str | Path, out: str | Path, *, labels: dict[str, Any],
@@ -107,7 +121,7 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
         raise StoreError("--out must differ from the source store")
     require_particles(cfg, "render/relabel")
     src_status = shard_status(src)
-    attempts = _dem_attempts(src)
+    attempts = dem_attempts(src)
     status = prepare_store(cfg, out, overwrite=overwrite)
     pending = [int(i) for i in np.flatnonzero(status != 1)]
     summary = SweepSummary(store=str(out), n_shards=len(status), samples_per_shard=cfg.samples_per_run,
@@ -119,9 +133,8 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
             if src_status[run] != 1:
                 summary.failed[run] = "not done in the source store"
                 continue
-            result = run_from_particles(cfg, plan_run(cfg, run), read_particles(src, run),
-                                        attempts.get(run, 0))
-            data = render_run(cfg, result, get_engine(cfg.model.engine))
+            data = render_run(cfg, stored_run(src, run, cfg, attempts),
+                              get_engine(cfg.model.engine))
             write_shard(out, run, data.arrays, data.params, data.snapshots)
             summary.completed.append(run)
             bar.update(cfg.samples_per_run)
@@ -133,7 +146,14 @@ def _redo(src: Path, out: str | Path, cfg: Config, *, overwrite: bool,
     return summary
 
 
-def _dem_attempts(src: Path) -> dict[int, int]:
+def stored_run(src: Path, run: int, cfg: Config, attempts: dict[int, int]) -> EngineRun:
+    """Run ``run`` of store ``src`` from its particle snapshots, planned with ``cfg``
+    (``attempts``: :func:`dem_attempts` of ``src``)."""
+    return run_from_particles(cfg, plan_run(cfg, run), read_particles(src, run),
+                              attempts.get(run, 0))
+
+
+def dem_attempts(src: Path) -> dict[int, int]:
     """``dem_attempt`` of every done run of ``src`` (run -> try); a store written before the
     DEM's stabilised tries has no such parameter: its runs all ran as configured (0)."""
     done = read_done_params(src, ["run_id", "dem_attempt"])
