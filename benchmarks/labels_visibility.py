@@ -20,6 +20,12 @@ Per sample (every stored sample of a snapshot shares its labels) the line report
   in 3 or more different columns pairs (a collapse zone, not a fault);
 - ``label_in_chaos``: the share of label pixels in such a neighbourhood.
 
+Per slip band of the labels (``slip_m`` of the label pixel, the bands of
+``benchmarks/learnability.py``'s recall by slip) the line also pools, over the faulted
+samples, the label pixels (``pixels``), the share of them on a visible offset
+(``visible``, as ``label_visible``) and the median of the largest offset in samples within
+``--tol`` px of each (``median_offset``): ``label_visible_by_slip``.
+
 One JSON line per store with the medians and the per-sample lists (``--per-sample``).
 
     PYTHONPATH=$PWD python benchmarks/labels_visibility.py STORE [--runs N] [--tol 2]
@@ -33,7 +39,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from scipy.ndimage import binary_dilation, uniform_filter
+from scipy.ndimage import binary_dilation, grey_dilation, uniform_filter
 
 from demseis.labels.offsets import pair_offsets
 
@@ -63,6 +69,51 @@ def sample_measures(fault: np.ndarray, offset: np.ndarray, rock: np.ndarray, min
         "label_in_chaos": float((lab & chaos).sum() / lab.sum()) if lab.any() else float("nan"),
     }
     return out
+
+
+#: slip bands (m) of ``label_visible_by_slip``: the edges of learnability.py's recall by slip
+SLIP_EDGES_M = (0.0, 10.0, 20.0, 40.0, 80.0, 160.0, np.inf)
+
+
+def slip_band_keys() -> list[str]:
+    """The names of the bands of :data:`SLIP_EDGES_M` (``below`` for slips under 10 m)."""
+    return ["below" if lo == 0.0 else f"{lo:g}-{hi:g}"
+            for lo, hi in zip(SLIP_EDGES_M[:-1], SLIP_EDGES_M[1:])]
+
+
+def label_offsets_by_slip(fault: np.ndarray, offset: np.ndarray, slip: np.ndarray,
+                          min_offset: float, tol: int) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Per slip band: (visible, largest offset) of each label pixel of the band.
+
+    ``offset`` is the (H, W - 1) offset in samples between traces j and j + 1 (NaN: none);
+    a pixel takes the larger of its two pairs, and a label pixel the largest within ``tol`` px
+    (a (2 tol + 1) square, as ``label_visible``). Visible: that offset is at least
+    ``min_offset``.
+    """
+    o = np.nan_to_num(offset, nan=0.0)
+    px = np.zeros(fault.shape)
+    px[:, :-1] = o
+    px[:, 1:] = np.maximum(px[:, 1:], o)
+    near = grey_dilation(px, size=(2 * tol + 1, 2 * tol + 1))
+    lab = fault > 0
+    out = {}
+    for key, lo, hi in zip(slip_band_keys(), SLIP_EDGES_M[:-1], SLIP_EDGES_M[1:]):
+        m = lab & (slip > 0) & (slip >= lo) & (slip < hi)
+        out[key] = (near[m] >= min_offset, near[m])
+    return out
+
+
+def pooled_by_slip(parts: list[dict[str, tuple[np.ndarray, np.ndarray]]]
+                   ) -> dict[str, dict[str, float | int | None]]:
+    """:func:`label_offsets_by_slip` of many samples pooled per band."""
+    res = {}
+    for key in slip_band_keys():
+        vis = np.concatenate([p[key][0] for p in parts]) if parts else np.zeros(0, bool)
+        off = np.concatenate([p[key][1] for p in parts]) if parts else np.zeros(0)
+        res[key] = {"pixels": int(vis.size),
+                    "visible": round(float(vis.mean()), 4) if vis.size else None,
+                    "median_offset": round(float(np.median(off)), 3) if off.size else None}
+    return res
 
 
 def state_reference_on_output(cfg, state, arrays_like, params
@@ -96,8 +147,10 @@ def state_reference_on_output(cfg, state, arrays_like, params
     return y0t, rockt, 2.0 / (vpt * float(cfg.output.dt_s))
 
 
-def measure_store(path: str, runs: int | None, min_offset: float, tol: int) -> list[dict]:
-    """Per-sample measures of the first ``runs`` done runs of ``path``."""
+def measure_store(path: str, runs: int | None, min_offset: float, tol: int
+                  ) -> tuple[list[dict], dict]:
+    """Per-sample measures of the first ``runs`` done runs of ``path``, and the label pixels'
+    offsets by slip band pooled over the faulted samples (:func:`pooled_by_slip`)."""
     import zarr
 
     from demseis.datasets import read_particles
@@ -114,8 +167,10 @@ def measure_store(path: str, runs: int | None, min_offset: float, tol: int) -> l
     if runs is not None:
         done = done[:runs]
     fault = root["fault"]
+    slip = root["slip_m"] if "slip_m" in root.array_keys() else None
     S = cfg.samples_per_run
     out = []
+    parts = []
     for run in done:
         spec = plan_run(cfg, int(run))
         if engine.particles:
@@ -131,10 +186,13 @@ def measure_store(path: str, runs: int | None, min_offset: float, tol: int) -> l
                 i = int(run) * S + r.sample
                 f = np.asarray(fault[i])
                 m = sample_measures(f, off, rock, min_offset, tol)
+                if slip is not None and int(snap) > 0:
+                    parts.append(label_offsets_by_slip(f, off, np.asarray(slip[i]), min_offset,
+                                                       tol))
                 m.update(run=int(run), snapshot=int(snap), sample=i, freq_hz=float(r.freq_hz))
                 out.append(m)
         print(f"run {run}: {len(out)} samples", file=sys.stderr)
-    return out
+    return out, pooled_by_slip(parts)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -145,7 +203,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tol", type=int, default=2, help="distance tolerance, px")
     ap.add_argument("--per-sample", action="store_true", help="include every sample's measures")
     args = ap.parse_args(argv)
-    rows = measure_store(args.store, args.runs, args.min_offset, args.tol)
+    rows, by_slip = measure_store(args.store, args.runs, args.min_offset, args.tol)
     keys = ("label_visible", "offset_labelled", "no_rock", "chaos", "label_in_chaos")
     faulted = [r for r in rows if r["snapshot"] > 0]
     line = {"benchmark": "labels_visibility", "store": Path(args.store).name,
@@ -159,6 +217,7 @@ def main(argv: list[str] | None = None) -> int:
     line["pooled_offset_labelled"] = float(
         np.nansum([r["offset_labelled"] * r["offset_px"] for r in faulted])
         / max(1, sum(r["offset_px"] for r in faulted if np.isfinite(r["offset_labelled"]))))
+    line["label_visible_by_slip"] = by_slip
     if args.per_sample:
         line["per_sample"] = rows
     print(json.dumps(line))
