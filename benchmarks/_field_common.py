@@ -129,6 +129,32 @@ def read_pair(section: str | Path, mask: str | Path, *, thin_lines: bool,
     return sec, (thin(m) if thin_lines else m)
 
 
+def field_dir_pairs(d: str | Path) -> list[tuple[str, str, str]]:
+    """[(key, section path, mask path)] of the ``seismic_<key>.*`` / ``mask_<key>.*`` pairs
+    of folder ``d`` (.npy, .png or SEG-Y), in key order.
+
+    Raises
+    ------
+    InputError
+        The folder holds no such pair.
+    """
+    from demseis.errors import InputError
+    from demseis.evaluation.fieldio import MASK_SUFFIXES
+
+    root = Path(d).expanduser()
+    pairs = []
+    for sec in sorted(root.glob("seismic_*")):
+        if sec.suffix.lower() not in MASK_SUFFIXES:
+            continue
+        key = sec.stem[len("seismic_"):]
+        masks = [m for m in root.glob(f"mask_{key}.*") if m.suffix.lower() in MASK_SUFFIXES]
+        if masks:
+            pairs.append((key, str(sec), str(masks[0])))
+    if not pairs:
+        raise InputError(f"--field-dir {d!r}: no seismic_<key> / mask_<key> pairs")
+    return pairs
+
+
 def read_field(pairs: list[str], *,
                thin_lines: bool = False) -> list[tuple[np.ndarray, np.ndarray]]:
     """(section, mask) pairs from ``SECTION:MASK`` arguments (:func:`read_pair`)."""

@@ -28,7 +28,7 @@ from demseis.evaluation.realism import best_lag
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _field_common import read_pair  # noqa: E402  (benchmarks/ is on sys.path)
+from _field_common import field_dir_pairs, read_pair  # noqa: E402  (benchmarks/ is on sys.path)
 
 
 def section_lags(section: np.ndarray, fault: np.ndarray, rng: np.random.Generator, *,
@@ -103,16 +103,12 @@ def main(argv: list[str] | None = None) -> int:
     for d in args.field_dir:
         rng = np.random.default_rng(args.seed)
         fl, bl = [], []
-        for sec in sorted(Path(d).glob("seismic_*")):
-            key = sec.stem[len("seismic_"):]
-            masks = sorted(Path(d).glob(f"mask_{key}.*"))
-            if not masks:
-                continue
-            s, m = read_pair(sec, masks[0], thin_lines=True)
+        for _key, sec, mask in field_dir_pairs(d):
+            s, m = read_pair(sec, mask, thin_lines=True)
             a, b = section_lags(s, m, rng, background=2000, **opts)
             fl.append(a)
             bl.append(b)
-        print(json.dumps(summary(Path(d).name, fl, bl)))
+        print(json.dumps(summary(Path(d).expanduser().name, fl, bl)))
     return 0
 
 

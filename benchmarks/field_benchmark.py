@@ -80,8 +80,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _field_common import (add_training_args, budget,  # noqa: E402  (benchmarks/ is on sys.path)
-                           load_results, machine, read_field, read_pair, read_section, resize,
-                           save_results, score_stack)
+                           field_dir_pairs, load_results, machine, read_field, read_pair,
+                           read_section, resize, save_results, score_stack)
 
 #: The controls built in the run: name -> (preset, overrides layered on it as a TOML file
 #: beside ``--preset`` would be; ``[sweep] n_runs`` comes from the command line).
@@ -202,23 +202,9 @@ def store_id(path: str) -> list:
 
 def field_sets(args: argparse.Namespace) -> dict[str, list[tuple[str, str, str]]]:
     """set name -> [(section name, section path, mask path)]."""
-    from demseis.errors import InputError
-    from demseis.evaluation.fieldio import MASK_SUFFIXES
-
     sets: dict[str, list[tuple[str, str, str]]] = {}
     for d in args.field_dir or []:
-        root = Path(d).expanduser()
-        pairs = []
-        for sec in sorted(root.glob("seismic_*")):
-            if sec.suffix.lower() not in MASK_SUFFIXES:
-                continue
-            key = sec.stem[len("seismic_"):]
-            masks = [m for m in root.glob(f"mask_{key}.*") if m.suffix.lower() in MASK_SUFFIXES]
-            if masks:
-                pairs.append((key, str(sec), str(masks[0])))
-        if not pairs:
-            raise InputError(f"--field-dir {d!r}: no seismic_<key> / mask_<key> pairs")
-        sets[root.name] = pairs
+        sets[Path(d).expanduser().name] = field_dir_pairs(d)
     for arg in args.field or []:
         name, eq, pair = arg.partition("=")
         if not eq or ":" in name:

@@ -65,14 +65,13 @@ def measure_store(path: str, runs: int, inner: float, outer: float, band: float)
     """Per slip band, the medians of the module docstring over the first ``runs`` done runs."""
     import zarr
 
-    from demseis.datasets import read_particles
     from demseis.datasets.status import shard_status
     from demseis.generator.config.layout import grid_of, trace_x
-    from demseis.generator.config.sampling import plan_run
     from demseis.generator.config.settings import stored_config
-    from demseis.generator.engines import get_engine, run_from_particles
+    from demseis.generator.engines import get_engine
     from demseis.generator.render.section import renders_by_snapshot, state_maps
     from demseis.generator.render.survey import labels_at_traces, reference_points
+    from demseis.generator.sweep.rerender import dem_attempts, stored_run
 
     root = zarr.open_group(path, mode="r")
     cfg = stored_config(dict(root.attrs)["config"])
@@ -83,13 +82,13 @@ def measure_store(path: str, runs: int, inner: float, outer: float, band: float)
     xt = trace_x(cfg)
     depth = (np.arange(grid.nz) + 0.5) * grid.cell_m
     stored = {k: None for k in root.array_keys()}
+    attempts = dem_attempts(Path(path))
     rows: list[tuple[float, float, float, float, float]] = []
     for run in np.flatnonzero(shard_status(path) == 1)[:runs]:
-        spec = plan_run(cfg, int(run))
-        parts = read_particles(path, int(run))
+        result = stored_run(Path(path), int(run), cfg, attempts)
+        parts = result.snapshots
         first = {int(i): k for k, i in enumerate(parts[0].ids)}
-        result = run_from_particles(cfg, spec, parts)
-        snaps = [k for k, _ in renders_by_snapshot(spec)]
+        snaps = [k for k, _ in renders_by_snapshot(result.spec)]
         for state, snap in zip(engine.states(cfg, result, snaps), snaps):
             if snap == 0:
                 continue

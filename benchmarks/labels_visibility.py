@@ -153,12 +153,12 @@ def measure_store(path: str, runs: int | None, min_offset: float, tol: int
     offsets by slip band pooled over the faulted samples (:func:`pooled_by_slip`)."""
     import zarr
 
-    from demseis.datasets import read_particles
     from demseis.datasets.status import shard_status
     from demseis.generator.config.sampling import plan_run
     from demseis.generator.config.settings import stored_config
-    from demseis.generator.engines import get_engine, run_from_particles
+    from demseis.generator.engines import get_engine
     from demseis.generator.render.section import renders_by_snapshot
+    from demseis.generator.sweep.rerender import dem_attempts, stored_run
 
     root = zarr.open_group(path, mode="r")
     cfg = stored_config(dict(root.attrs)["config"])
@@ -169,16 +169,17 @@ def measure_store(path: str, runs: int | None, min_offset: float, tol: int
     fault = root["fault"]
     slip = root["slip_m"] if "slip_m" in root.array_keys() else None
     S = cfg.samples_per_run
+    attempts = dem_attempts(Path(path)) if engine.particles else {}
+    stored = {k: None for k in root.array_keys()}
     out = []
     parts = []
     for run in done:
-        spec = plan_run(cfg, int(run))
         if engine.particles:
-            er = run_from_particles(cfg, spec, read_particles(path, int(run)))
+            er = stored_run(Path(path), int(run), cfg, attempts)
         else:
-            er = engine.simulate(cfg, spec)
+            er = engine.simulate(cfg, plan_run(cfg, int(run)))
+        spec = er.spec
         groups = renders_by_snapshot(spec)
-        stored = {k: None for k in root.array_keys()}
         for state, (snap, renders) in zip(engine.states(cfg, er, [k for k, _ in groups]), groups):
             y0, rock, scale = state_reference_on_output(cfg, state, stored, spec.params)
             off = pair_offsets(y0, scale)
