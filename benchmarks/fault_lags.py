@@ -1,12 +1,12 @@
 """How far the reflectors step at the faults of a training store and of hand-picked field
 sections, measured the same way on both: the seismic itself, not the labels' slip.
 
-At every ``--step``-th fault pixel (row t, trace j; field masks thinned to lines, as the
-field benchmark scores them) the traces ``j - side`` and ``j + side`` are aligned over rows
-``t +- window`` (:func:`demseis.evaluation.realism.best_lag`, up to ``--max-lag`` samples);
-a pixel counts only where neither trace holds a fault label in the window. The same at
-``--background`` random pixels farther than that from any label gives the lags the section
-shows where nobody picked a fault (dipping beds, noise). One JSON line per source: the
+At every fault pixel (row t, trace j; field masks thinned to lines, as the field benchmark
+scores them) the traces ``j - side`` and ``j + side`` are aligned over rows ``t +- window``
+(:func:`demseis.evaluation.realism.best_lag`, up to ``--max-lag`` samples); a pixel counts
+only where neither trace holds a fault label in the window. The same at random pixels
+farther than that from any label (300 per store sample, 2000 per field section) gives the
+lags the section shows where nobody picked a fault (dipping beds, noise). One JSON line per source: the
 pixels, the shares of fault pixels and of background pixels with ``|lag|`` of at least 1, 2
 and 3 samples, and the median fault lag.
 
@@ -22,6 +22,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import zarr
 from scipy.ndimage import binary_dilation
 
 from demseis.evaluation.realism import best_lag
@@ -87,8 +88,6 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     opts = dict(side=args.side, window=args.window, max_lag=args.max_lag)
     for path in args.store:
-        import zarr
-
         rng = np.random.default_rng(args.seed)
         root = zarr.open_group(path, mode="r")
         n = root["seismic"].shape[0]

@@ -4,9 +4,10 @@ the jump that a label's slip measures is throw (vertical) and how much is openin
 the rendered reference map.
 
 For every label cell of the depth-grid label maps at the traces (what the picks draw from) of
-the first ``--runs`` done runs' faulted snapshots: the elements whose depth is within
-``--band`` m of the cell's and whose x lies ``--inner`` to ``--outer`` m to one side give
-that side's median displacement since snapshot 0; the right side's minus the left side's is
+the first ``--runs`` done runs' faulted snapshots: the elements of snapshot 0 whose depth
+is within ``--band`` m of the cell's and whose x lies ``--inner`` to ``--outer`` m to one
+side give that side's median displacement since snapshot 0
+(:func:`demseis.labels.displacement_history`); the right side's minus the left side's is
 the rock's jump ``(dx, dy)`` across the label (:func:`side_jump`). Beside it, the jump of the
 rendered reference elevation ``y0`` along the cell's row over two traces either side, less
 the trend of the four pairs beyond (:func:`reference_jump`), and the label's ``slip_m`` and
@@ -72,6 +73,7 @@ def measure_store(path: str, runs: int, inner: float, outer: float, band: float)
     from demseis.generator.render.section import renders_by_snapshot, state_maps
     from demseis.generator.render.survey import labels_at_traces, reference_points
     from demseis.generator.sweep.rerender import dem_attempts, stored_run
+    from demseis.labels import displacement_history
 
     root = zarr.open_group(path, mode="r")
     cfg = stored_config(dict(root.attrs)["config"])
@@ -87,16 +89,15 @@ def measure_store(path: str, runs: int, inner: float, outer: float, band: float)
     for run in np.flatnonzero(shard_status(path) == 1)[:runs]:
         result = stored_run(Path(path), int(run), cfg, attempts)
         parts = result.snapshots
-        first = {int(i): k for k, i in enumerate(parts[0].ids)}
+        history = displacement_history(parts)
         snaps = [k for k, _ in renders_by_snapshot(result.spec)]
         for state, snap in zip(engine.states(cfg, result, snaps), snaps):
             if snap == 0:
                 continue
-            now = parts[snap]
-            k1 = np.array([k for k, i in enumerate(now.ids) if int(i) in first], dtype=np.int64)
-            k0 = np.array([first[int(now.ids[k])] for k in k1], dtype=np.int64)
-            ex, ey = now.xy[k1, 0], now.xy[k1, 1]
-            ux, uy = ex - parts[0].xy[k0, 0], ey - parts[0].xy[k0, 1]
+            disp, birth = history[snap]
+            old = birth == 0                    # the elements of snapshot 0, moved since then
+            ex, ey = parts[snap].xy[old, 0], parts[snap].xy[old, 1]
+            ux, uy = disp[old, 0], disp[old, 1]
             maps = labels_at_traces(cfg, state_maps(state, stored))
             _, y0, _ = reference_points(state.reference, xt, depth)
             slip, dip = maps["slip_m"], maps["dip_deg"]
