@@ -171,16 +171,18 @@ def read_field(pairs: list[str], *,
 
 # ------------------------------------------------------------------------------- scoring
 
-def score_stack(probs: list[np.ndarray], truth: list[np.ndarray], tolerance: float):
+def score_stack(probs: list[np.ndarray], truth: list[np.ndarray], tolerance: float,
+                threshold: float = 0.5):
     """:func:`demseis.evaluation.score` of sections that may differ in shape, pooled: they are
-    padded with zeros (no prediction, no label) to one stack, which changes no count."""
+    padded with zeros (no prediction, no label) to one stack, which changes no count.
+    ``threshold`` is that of the counts (precision, recall, F1); the sweeps ignore it."""
     from demseis.evaluation import score
 
     h = max(p.shape[0] for p in probs)
     w = max(p.shape[1] for p in probs)
     pad = lambda a: np.pad(a, ((0, h - a.shape[0]), (0, w - a.shape[1])))  # noqa: E731
     return score(np.stack([pad(np.asarray(p, np.float32)) for p in probs]),
-                 np.stack([pad(np.asarray(t, np.uint8)) for t in truth]), threshold=0.5,
+                 np.stack([pad(np.asarray(t, np.uint8)) for t in truth]), threshold=threshold,
                  tolerance_px=tolerance)
 
 

@@ -54,6 +54,14 @@ the probability is resampled back onto the mask's grid before scoring.
 Held-out synthetic scores: F1 at threshold 0.5, ODS F1 and AP of every model on the held-out
 runs (25 %) of every training store (at most ``--max-eval`` sections each).
 
+At the held-out threshold (``at_heldout_threshold`` in each line): ODS F1 picks its threshold
+on the field set itself, and the share above 0.5 depends on how high a model's probabilities
+run (models trained on denser labels give higher ones everywhere). So each model is also read
+at one threshold chosen without field data, the one that maximises its F1 at 2 px on the
+held-out runs of its own training stores (pooled): the threshold, that held-out F1, F1 of every
+field set at each tolerance and the share of its pixels at or above it, and F3's share (all at
+field scale 1).
+
 Results accumulate in ``--results`` (JSON): a (training set, seed) already trained with the
 same configuration (stores, budget, device kind) is not retrained, and a score already there
 for the same inputs is not recomputed. Prints one JSON line per training set: mean, std, min,
@@ -99,6 +107,8 @@ FIELD_METRICS = ("ods_f1", "ois_f1", "ap")
 SYNTH_METRICS = ("f1", "ods_f1", "ap")
 #: share of a section's pixels above this probability
 SHARE_AT = 0.5
+#: the matching distance (px) of the threshold chosen on held-out synthetic runs
+HELDOUT_TOL = 2.0
 
 
 def digest(obj) -> str:
@@ -261,22 +271,46 @@ def predict(model, section: np.ndarray, factor: float) -> np.ndarray:
 
 # --------------------------------------------------------------------------------- cells
 
+def _test_set(cache: dict, store: str, fr: tuple, max_eval: int) -> tuple[list, list]:
+    """:func:`synthetic_test_set`, read once per benchmark run."""
+    key = ("test", str(store), tuple(fr), int(max_eval))
+    if key not in cache:
+        cache[key] = synthetic_test_set(store, fr, max_eval)
+    return cache[key]
+
+
+def _test_probs(model, cache: dict, probs: dict, store: str, fr: tuple,
+                max_eval: int) -> tuple[list, list]:
+    """(probabilities, truth) of ``store``'s held-out sections, predicted once per model."""
+    secs, truth = _test_set(cache, store, fr, max_eval)
+    key = ("test", str(store))
+    if key not in probs:
+        from demseis.learning.train import predict_sections
+
+        probs[key] = list(predict_sections(model, np.stack(secs))) if secs else []
+    return probs[key], truth
+
+
 def item_scores(model, key: str, item: dict, tolerances: list[float], train_period: float,
-                cache: dict) -> dict:
-    """The scores of one item (a field set at one scale, F3 at one scale, or a store's held-out
-    runs) of one model."""
+                cache: dict, probs: dict | None = None, stores: list[str] | None = None) -> dict:
+    """The scores of one item (a field set at one scale, F3 at one scale, a store's held-out
+    runs, or the field sets at the threshold chosen on held-out runs) of one model.
+
+    ``probs`` keeps the model's predictions between its items (held-out runs, field sets at
+    scale 1, F3) so that the held-out-threshold item predicts nothing twice; ``stores`` are the
+    model's training stores (that item only)."""
+    probs = {} if probs is None else probs
+    if item["kind"] == "heldout_threshold":
+        return heldout_threshold_scores(model, item, stores or [], tolerances, cache, probs)
     if item["kind"] == "synthetic":
-        if key not in cache:
-            cache[key] = synthetic_test_set(item["store"], item["fr"], item["max_eval"])
-        secs, truth = cache[key]
+        secs = _test_set(cache, item["store"], item["fr"], item["max_eval"])[0]
         out = {"n_sections": len(secs)}
         if not secs:
             return out
-        from demseis.learning.train import predict_sections
-
-        probs = list(predict_sections(model, np.stack(secs)))
+        held, truth = _test_probs(model, cache, probs, item["store"], item["fr"],
+                                  item["max_eval"])
         for tol in tolerances:
-            r = score_stack(probs, truth, tol)
+            r = score_stack(held, truth, tol)
             out.update({f"{m}_tol{tol:g}": round(float(getattr(r, m)), 4) for m in SYNTH_METRICS})
         return out
     if item["kind"] == "f3":
@@ -285,25 +319,69 @@ def item_scores(model, key: str, item: dict, tolerances: list[float], train_peri
         sec = cache["f3"]
         f = scale_factor(item["scale"], train_period, sec)
         prob = predict(model, sec, f)
+        probs[("f3", item["scale"])] = prob
         return {"share_above_0.5": round(float((prob > SHARE_AT).mean()), 5),
                 "factor": round(f, 4), "_prob": prob}
-    secs = []
-    for name, s, m in item["pairs"]:
-        if (s, m) not in cache:
-            cache[(s, m)] = read_pair(s, m, thin_lines=item["thin"])
-        secs.append((name, *cache[(s, m)]))
-    probs, factors = [], []
+    secs = [(name, *cache_pair(cache, s, m, item["thin"])) for name, s, m in item["pairs"]]
+    maps, factors = [], []
     for _, sec, _ in secs:
         factors.append(scale_factor(item["scale"], train_period, sec))
-        probs.append(predict(model, sec, factors[-1]))
+        maps.append(predict(model, sec, factors[-1]))
+    probs[("field", item["name"], item["scale"])] = maps
     out = {"share_above_0.5": {n: round(float((p > SHARE_AT).mean()), 5)
-                               for (n, _, _), p in zip(secs, probs)},
+                               for (n, _, _), p in zip(secs, maps)},
            "factor": {n: round(f, 4) for (n, _, _), f in zip(secs, factors)},
-           "_prob": probs}
+           "_prob": maps}
     for tol in tolerances:
-        r = score_stack(probs, [t for _, _, t in secs], tol)
+        r = score_stack(maps, [t for _, _, t in secs], tol)
         out.update({f"{m}_tol{tol:g}": round(float(getattr(r, m)), 4) for m in FIELD_METRICS})
     return out
+
+
+def heldout_threshold_scores(model, item: dict, stores: list[str], tolerances: list[float],
+                             cache: dict, probs: dict) -> dict:
+    """The field sets and F3 at one threshold chosen without field data: the one that maximises
+    F1 at :data:`HELDOUT_TOL` px on the held-out runs of the model's own training stores
+    (pooled, at most ``max_eval`` sections each; the threshold sweep of
+    :func:`demseis.evaluation.score`). ODS F1 picks its threshold on the field set itself; this
+    is the threshold a user without picks would take, and F3's share above it is that of a
+    map thresholded so, not of one probability scale (models trained on denser labels give
+    higher probabilities everywhere)."""
+    held, truth = [], []
+    for store in stores:
+        p, t = _test_probs(model, cache, probs, store, item["fr"], item["max_eval"])
+        held += p
+        truth += t
+    if not held:
+        return {"n_sections": 0}
+    r = score_stack(held, truth, HELDOUT_TOL)
+    thr = float(r.ods_threshold)
+    out = {"n_sections": len(held), "threshold": round(thr, 4),
+           f"heldout_f1_tol{HELDOUT_TOL:g}": round(float(r.ods_f1), 4), "field": {}}
+    for name, pairs in item["field"].items():
+        key = ("field", name, "1")
+        if key not in probs:
+            probs[key] = [predict(model, cache_pair(cache, s, m, item["thin"])[0], 1.0)
+                          for _, s, m in pairs]
+        truths = [cache_pair(cache, s, m, item["thin"])[1] for _, s, m in pairs]
+        got = {"share": round(float(np.mean([(p >= thr).mean() for p in probs[key]])), 5)}
+        for tol in tolerances:
+            got[f"f1_tol{tol:g}"] = round(float(score_stack(probs[key], truths, tol, thr).f1), 4)
+        out["field"][name] = got
+    if item.get("f3"):
+        if ("f3", "1") not in probs:
+            if "f3" not in cache:
+                cache["f3"] = read_section(item["f3"], "--f3")
+            probs[("f3", "1")] = predict(model, cache["f3"], 1.0)
+        out["f3_share"] = round(float((probs[("f3", "1")] >= thr).mean()), 5)
+    return out
+
+
+def cache_pair(cache: dict, section: str, mask: str, thin: bool) -> tuple:
+    """(section, mask) of a field pair, read once per benchmark run."""
+    if (section, mask) not in cache:
+        cache[(section, mask)] = read_pair(section, mask, thin_lines=thin)
+    return cache[(section, mask)]
 
 
 def stats(values) -> dict | None:
@@ -362,6 +440,14 @@ def summary_line(name: str, cells: list[dict], items: dict, config: dict) -> dic
             continue
         if item["kind"] == "synthetic":
             line["synthetic"][item["name"]] = {m: stats([g[m] for g in got]) for m in got[0]}
+        elif item["kind"] == "heldout_threshold":
+            got = [g for g in got if "threshold" in g]
+            if got:
+                line["at_heldout_threshold"] = {
+                    m: stats([g[m] for g in got]) for m in got[0] if m != "field"}
+                line["at_heldout_threshold"]["field"] = {
+                    n: {m: stats([g["field"][n][m] for g in got]) for m in v}
+                    for n, v in got[0]["field"].items()}
         elif item["kind"] == "f3":
             line["f3"][item["scale"]] = {"share_above_0.5": stats(
                 [g["share_above_0.5"] for g in got]), "factor": got[0]["factor"]}
@@ -393,8 +479,9 @@ def model_line(arg: str, items: dict, tolerances: list[float]) -> dict:
             "trained": {k: model.demseis_metrics.get(k) for k in ("steps", "base", "seed")},
             "field": {}, "f3": {}}
     for key, item in items.items():
-        # "auto" scales by the training stores' period, which a given model does not come with
-        if item["kind"] == "synthetic" or item.get("scale") == "auto":
+        # "auto" scales by the training stores' period, which a given model does not come with;
+        # nor does it come with held-out runs to choose a threshold on
+        if item["kind"] in ("synthetic", "heldout_threshold") or item.get("scale") == "auto":
             continue
         got = item_scores(model, key, item, tolerances, 1.0, cache)
         got.pop("_prob", None)
@@ -543,6 +630,14 @@ def main(argv: list[str] | None = None) -> int:
             items[f"f3:{scale}:{digest(_file_id(args.f3))}"] = {
                 "kind": "f3", "scale": scale, "path": args.f3}
 
+    if fsets or args.f3:  # the field sets and F3 at the threshold chosen on held-out runs
+        ids = [[_file_id(s) + _file_id(m) for _, s, m in pairs] for pairs in fsets.values()]
+        f3_id = _file_id(args.f3) if args.f3 else None
+        items["heldout_threshold:" + digest([ids, f3_id, not args.no_thin, fr, args.max_eval,
+                                             tols, HELDOUT_TOL])] = {
+            "kind": "heldout_threshold", "field": fsets, "f3": args.f3, "fr": fr,
+            "max_eval": args.max_eval, "thin": not args.no_thin}
+
     for arg in args.model or []:  # given models: scored as they are, on the field sections
         print(json.dumps(model_line(arg, items, tols)), flush=True)
 
@@ -601,11 +696,13 @@ def main(argv: list[str] | None = None) -> int:
                 results["cells"].append(cell)
                 todo = list(items)
             if want_fig:  # the drawn predictions are made again (they are not kept)
-                todo += [k for k, it in items.items() if k not in todo and it["kind"] != "synthetic"
-                         and it["scale"] == args.field_scale[0]]
+                todo += [k for k, it in items.items() if k not in todo
+                         and it["kind"] in ("field", "f3") and it["scale"] == args.field_scale[0]]
             t0 = time.perf_counter()
-            for key in todo:
-                got = item_scores(model, key, items[key], tols, train_period, cache_data)
+            cell_probs: dict = {}  # this model's predictions, shared between its items
+            for key in sorted(todo, key=lambda k: items[k]["kind"] == "heldout_threshold"):
+                got = item_scores(model, key, items[key], tols, train_period, cache_data,
+                                  cell_probs, stores)
                 probs = got.pop("_prob", None)
                 cell["scores"][key] = got
                 scale = items[key].get("scale")

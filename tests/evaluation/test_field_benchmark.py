@@ -135,6 +135,13 @@ def test_whole_benchmark_on_tiny_stores(bench, field, tiny_store, tmp_path, caps
             {p.stem[len("seismic_"):] for p in (root / "set").glob("seismic_*")}
         assert set(line["synthetic"]["kin"]) == {"n_sections"} | {
             f"{m}_tol{t}" for m in ("f1", "ods_f1", "ap") for t in (3, 2)}
+    for line in lines:  # the threshold of each model's own held-out runs (pooled for mix)
+        at = line["at_heldout_threshold"]
+        assert at["n_sections"]["mean"] == sum(
+            sc["n_sections"]["mean"] for n, sc in line["synthetic"].items()
+            if n in ("dem", "kin") and (n == line["model"] or line["model"] == "mix"))
+        assert 0 < at["threshold"]["min"] <= at["threshold"]["max"] < 1
+        assert set(at["field"]) == {"set", "npy"} and 0 <= at["f3_share"]["mean"] <= 1
     mix = lines[2]["stores"]
     assert mix[0] == str(tiny_store) and "kin-" in mix[1] and lines[2]["weights"] == [1.0, 2.0]
     assert fig.stat().st_size > 0
@@ -199,6 +206,69 @@ def test_planar_controls_are_built_once_with_their_fault_counts(bench, field, tm
         assert lo <= faults.min() and faults.max() <= hi
     assert bench["main"](argv) == 0
     assert "building" not in capsys.readouterr().err
+
+
+def test_field_sets_and_f3_at_the_threshold_chosen_on_held_out_runs(bench, common, field,
+                                                                    tiny_store, tmp_path,
+                                                                    capsys):
+    """at_heldout_threshold: the threshold that maximises F1 at 2 px on the model's own
+    held-out runs, and the field set's F1 and F3's share at it, recomputed here from the saved
+    model with demseis.evaluation.score; a results file without them gets them from the saved
+    model, with no training."""
+    import torch
+
+    from demseis.evaluation import score
+    from demseis.learning.model import predict_array
+    from demseis.learning.train import build_unet, predict_sections
+
+    root, _ = field
+    results, cache = tmp_path / "r.json", tmp_path / "c"
+    argv = ["--store", f"dem={tiny_store}", "--field-dir", str(root / "set"),
+            "--f3", str(root / "f3.sgy"), "--field-scale", "1", "--seeds", "0",
+            "--steps", "6", "--base", "4", "--crop", "32", "--batch", "2", "--threads", "1",
+            "--device", "cpu", "--test-fraction", "0.5", "--max-eval", "4",
+            "--cache", str(cache), "--results", str(results)]
+    assert bench["main"](argv) == 0
+    at = json.loads(capsys.readouterr().out.strip())["at_heldout_threshold"]
+
+    (saved,) = (cache / "models").glob("*-0.pt")
+    model = build_unet(4)
+    model.load_state_dict(torch.load(saved, map_location="cpu", weights_only=True))
+    model.eval()
+    secs, held = bench["synthetic_test_set"](str(tiny_store), (0.5, 0.0, 0.5), 4)
+    ref = score(np.stack(list(predict_sections(model, np.stack(secs)))),
+                np.stack(held).astype(np.uint8), tolerance_px=2.0)
+    thr = float(ref.ods_threshold)
+    assert 0.0 < thr < 1.0 and at["n_sections"]["mean"] == len(secs)
+    assert at["threshold"]["mean"] == pytest.approx(thr, abs=1e-4)
+    assert at["heldout_f1_tol2"]["mean"] == pytest.approx(float(ref.ods_f1), abs=1e-4)
+
+    maps, masks = [], []
+    for sec_path in sorted((root / "set").glob("seismic_*")):
+        mask_path = next((root / "set").glob(f"mask_{sec_path.stem[len('seismic_'):]}.*"))
+        sec, mask = common["read_pair"](sec_path, mask_path, thin_lines=True)
+        maps.append(predict_array(model, sec))
+        masks.append(mask)
+    for tol in (3, 2):
+        want = score(np.stack(maps), np.stack(masks).astype(np.uint8), threshold=thr,
+                     tolerance_px=float(tol)).f1
+        assert at["field"]["set"][f"f1_tol{tol}"]["mean"] == pytest.approx(float(want), abs=1e-4)
+    assert at["field"]["set"]["share"]["mean"] == pytest.approx(
+        float(np.mean([(m >= thr).mean() for m in maps])), abs=1e-4)
+    f3 = predict_array(model, common["read_section"](root / "f3.sgy", "--f3"))
+    assert at["f3_share"]["mean"] == pytest.approx(float((f3 >= thr).mean()), abs=1e-4)
+
+    # results written before this score existed: it is added from the saved model (and a
+    # figure drawn from it beside)
+    data = json.loads(results.read_text())
+    for cell in data["cells"]:
+        cell["scores"] = {k: v for k, v in cell["scores"].items()
+                          if not k.startswith("heldout_threshold:")}
+    results.write_text(json.dumps(data))
+    assert bench["main"](argv + ["--figure", str(tmp_path / "f.png")]) == 0
+    out = capsys.readouterr()
+    assert "training " not in out.err and (tmp_path / "f.png").stat().st_size > 0
+    assert json.loads(out.out.strip())["at_heldout_threshold"] == at
 
 
 def test_a_given_model_is_scored_without_training(bench, field, tmp_path, capsys):
