@@ -314,9 +314,7 @@ def item_scores(model, key: str, item: dict, tolerances: list[float], train_peri
             out.update({f"{m}_tol{tol:g}": round(float(getattr(r, m)), 4) for m in SYNTH_METRICS})
         return out
     if item["kind"] == "f3":
-        if "f3" not in cache:
-            cache["f3"] = read_section(item["path"], "--f3")
-        sec = cache["f3"]
+        sec = cache_f3(cache, item["path"])
         f = scale_factor(item["scale"], train_period, sec)
         prob = predict(model, sec, f)
         probs[("f3", item["scale"])] = prob
@@ -370,9 +368,7 @@ def heldout_threshold_scores(model, item: dict, stores: list[str], tolerances: l
         out["field"][name] = got
     if item.get("f3"):
         if ("f3", "1") not in probs:
-            if "f3" not in cache:
-                cache["f3"] = read_section(item["f3"], "--f3")
-            probs[("f3", "1")] = predict(model, cache["f3"], 1.0)
+            probs[("f3", "1")] = predict(model, cache_f3(cache, item["f3"]), 1.0)
         out["f3_share"] = round(float((probs[("f3", "1")] >= thr).mean()), 5)
     return out
 
@@ -382,6 +378,13 @@ def cache_pair(cache: dict, section: str, mask: str, thin: bool) -> tuple:
     if (section, mask) not in cache:
         cache[(section, mask)] = read_pair(section, mask, thin_lines=thin)
     return cache[(section, mask)]
+
+
+def cache_f3(cache: dict, path: str) -> np.ndarray:
+    """The unlabelled section of ``--f3``, read once per benchmark run."""
+    if "f3" not in cache:
+        cache["f3"] = read_section(path, "--f3")
+    return cache["f3"]
 
 
 def stats(values) -> dict | None:
