@@ -324,7 +324,8 @@ def _learning_model() -> ModuleType:
 
 
 def predict(model: Any, source: Any, out: str | Path | None = None, *,
-            device: str | None = None, overwrite: bool = False, progress: bool = False) -> Any:
+            device: str | None = None, overwrite: bool = False, progress: bool = False,
+            mask: str | Path | None = None, threshold: float | None = None) -> Any:
     """Fault probability of seismic sections with a model from :func:`train`.
 
     Parameters
@@ -339,8 +340,12 @@ def predict(model: Any, source: Any, out: str | Path | None = None, *,
         probabilities as an array of the input's shape (a SEG-Y section as (samples, traces);
         a cube needs ``out``).
     device : ``"cpu"``, ``"cuda"`` ... (default: CUDA when available).
-    overwrite : replace an existing ``out``.
+    overwrite : replace an existing ``out`` (and ``mask``).
     progress : a progress bar over a cube's lines.
+    mask : with ``out``, also write the faults as 1 where the probability reaches
+        ``threshold`` and 0 elsewhere (``.sgy`` or ``.npy``, as ``out``).
+    threshold : the mask's threshold (default: the one saved with the model, chosen on its
+        validation runs; :func:`demseis.learning.model.model_threshold`).
 
     Returns
     -------
@@ -351,7 +356,9 @@ def predict(model: Any, source: Any, out: str | Path | None = None, *,
         model = m.pretrained_path()
     if out is not None:  # the paths are checked before the model is loaded
         return m.predict_file(model, source, out, device=device, overwrite=overwrite,
-                              progress=progress)
+                              progress=progress, mask=mask, threshold=threshold)
+    if mask is not None:
+        raise InputError("mask: give out as well (the probability file written beside it)")
     net = m.load_model(model, device) if isinstance(model, (str, Path)) else model
     if isinstance(source, (str, Path)):
         data = m.read_segy_section(source) if m.is_segy(source) else np.load(source)

@@ -327,7 +327,7 @@ def _read_line(path: str | Path, line: tuple[str, int] | None, flag: str) -> np.
 
 def plot_section(section: str | Path, out: str | Path, *, pred: str | Path | None = None,
                  labels: str | Path | None = None, threshold: float | None = None,
-                 line: tuple[str, int] | None = None) -> Path:
+                 line: tuple[str, int] | None = None, how: str | None = None) -> Path:
     """A section from a file (SEG-Y, ``.npy`` or ``.png``), with a fault prediction over it
     (``pred``: probabilities in [0, 1], the same shape) and a hand-picked mask
     (``labels``: ``.npy``, ``.png`` or SEG-Y), each in its own panel. For a 3-D SEG-Y cube
@@ -336,7 +336,8 @@ def plot_section(section: str | Path, out: str | Path, *, pred: str | Path | Non
 
     The prediction is drawn where it reaches ``threshold``: by default Otsu's threshold of its
     own probabilities (:func:`otsu_threshold`), named in the title, so that a model whose
-    probabilities run low still shows its faults; the colour is the probability.
+    probabilities run low still shows its faults; the colour is the probability. ``how``
+    names where a given threshold comes from in the title (default "given").
 
     Raises
     ------
@@ -361,7 +362,7 @@ def plot_section(section: str | Path, out: str | Path, *, pred: str | Path | Non
             raise InputError(f"--threshold {threshold!r}: expected a probability in (0, 1)")
         t = otsu_threshold(prob) if threshold is None else float(threshold)
         share = float((prob >= t).mean())
-        how = "Otsu of its probabilities" if threshold is None else "given"
+        how = "Otsu of its probabilities" if threshold is None else (how or "given")
         panels.append((f"prediction >= {t:.2f} ({how}; {100 * share:.1f} % of pixels)", prob, t))
     if labels is not None:
         mask = read_mask(labels)

@@ -67,7 +67,10 @@ def test_what_needs_torch_names_the_extra(no_torch):
 
 
 @pytest.mark.parametrize("args", [["train", "t.zarr", "--out", "m.pt"],
-                                  ["predict", "m.pt", "in.npy", "--out", "out.npy"]])
+                                  ["predict", "m.pt", "in.npy", "--out", "out.npy"],
+                                  ["predict", "m.pt", "in.npy", "--out", "o.npy", "--mask",
+                                   "k.npy"],
+                                  ["threshold", "m.pt", "t.zarr"]])
 def test_train_and_predict_name_the_extra(no_torch, args):
     run, d = no_torch
     import numpy as np

@@ -1,5 +1,6 @@
-"""``demseis train`` and ``demseis predict``: a fault-segmentation U-Net from a store, and the
-fault probability of any section (SEG-Y or .npy) with it. Both need torch (the ``[torch]``
+"""``demseis train``, ``predict`` and ``threshold``: a fault-segmentation U-Net from a store,
+the fault probability of any section (SEG-Y or .npy) with it, and the threshold its faults are
+drawn from. They need torch (the ``[torch]``
 extra); see :mod:`demseis.learning.model`."""
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from demseis.cli._args import nonneg_int, pos_int
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``train`` and ``predict``."""
+    """Add ``train``, ``predict`` and ``threshold``."""
     t = sub.add_parser(
         "train", help="train a fault-segmentation U-Net on one or more stores (needs "
         "demseis[torch])",
@@ -33,6 +34,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="leave the pixels of this label array out of the training loss (with "
                    "these values; default any non-zero), in the stores that hold it; e.g. "
                    "fault_uncertain, stored with [labels] fault_uncertain = true (docs/labels.md)")
+    t.add_argument("--select", choices=("ods_f1", "f1"), default="ods_f1",
+                   help="the validation score that picks the model kept: F1 at the model's best "
+                   "threshold, which is saved with it (ods_f1, the default), or F1 at 0.5 (f1)")
     t.add_argument("--out", default="model.pt", help="model file (default model.pt)")
     t.add_argument("--steps", type=pos_int, default=300,
                    help="optimiser steps in all, counting those before a --resume (default 300)")
@@ -73,7 +77,28 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--device", default=None,
                    help="cpu, cuda, cuda:1 ... (default: CUDA when available)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    p.add_argument("--mask", default=None,
+                   help="also write the faults: 1 where the probability reaches the threshold, "
+                   "0 elsewhere (.sgy/.segy or .npy)")
+    p.add_argument("--threshold", type=float, default=None,
+                   help="the threshold of --mask and --png (default: the model's, chosen on its "
+                   "validation runs by demseis train; 0.5 for a model without one)")
     p.add_argument("--png", default=None,
-                   help="also draw the section with the prediction over it (as demseis plot "
-                   "SECTION --pred OUT does) into this PNG")
+                   help="also draw the section with the prediction over it, from the threshold, "
+                   "into this PNG")
     p.set_defaults(func="model:cmd_predict")
+
+    c = sub.add_parser(
+        "threshold", help="choose a model's threshold on the validation runs of its stores "
+        "and save it in the model (needs demseis[torch])",
+        description="Choose the probability threshold at which a model finds the faults of "
+        "the given stores best (F1 at 2 px on their validation runs, pooled) and save it in "
+        "the model file and its JSON, with the test runs scored at it. demseis train does "
+        "this itself; this command is for models made without it. Give the stores the model "
+        "was trained on.")
+    c.add_argument("model", metavar="MODEL", help="model file from demseis train")
+    c.add_argument("store", metavar="STORE", nargs="+",
+                   help="the store(s) the model was trained on")
+    c.add_argument("--device", default=None,
+                   help="cpu, cuda, cuda:1 ... (default: CUDA when available)")
+    c.set_defaults(func="model:cmd_threshold")

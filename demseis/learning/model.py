@@ -7,6 +7,7 @@ and from the file to the fault probability of any section (a store's, or your SE
     metrics = train_model("quick.zarr", "model.pt", steps=300)  # held-out precision, recall, F1, AP
     metrics = train_model(["a.zarr", "b.zarr"], "ab.pt", weights=[2, 1])   # a mix of two stores
     predict_file("model.pt", "line.sgy", "faults.sgy")          # probability with line.sgy's headers
+    predict_file("model.pt", "line.sgy", "p.sgy", mask="m.sgy") # and 0/1 at the model's threshold
 
 Training is :func:`demseis.learning.train.train_unet` on the store's ``train`` runs; the model
 kept is the best on the ``val`` runs, and the metrics are those of the ``test`` runs (never seen
@@ -16,6 +17,14 @@ tolerance of :data:`TOLERANCE_PX` pixels. The three splits are whole runs
 stores train one model: each is split by its own runs, batches draw from their train runs in
 proportion to ``weights``, and validation and the test metrics cover every store (pooled, and
 per store in ``per_store``).
+
+The model's threshold: a network's probabilities run as high as its training labels were dense
+(a model trained on DEM labels puts most of a field section above 0.5), so 0.5 is no threshold
+to read every model at. :func:`choose_threshold` picks the one that maximises F1 at
+:data:`TOLERANCE_PX` on the validation runs (the sweep of :func:`demseis.evaluation.score`);
+:func:`train_model` saves it in the model file and reports the test runs at it, and
+:func:`predict_file` draws the fault mask there. :func:`set_threshold` chooses and saves one for
+a model made without (``demseis threshold MODEL STORE``).
 
 Files: ``OUT`` (``torch.save`` of a dict: the weights, the U-Net width, what it was trained on
 and its metrics), ``OUT`` with the suffix ``.json`` (the metrics and settings), and ``OUT.ckpt``
@@ -28,8 +37,8 @@ from __future__ import annotations
 import json
 import os
 import sys
-from importlib import resources
 from collections.abc import Callable, Sequence
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -39,10 +48,10 @@ from tqdm import tqdm
 from demseis.datasets import FaultSegDataset, open_store, store_layout
 from demseis.errors import InputError, import_torch
 from demseis.evaluation.scoring import SampleCounts, summarise
-from demseis.evaluation.store_scoring import score_store
 from demseis.evaluation.segyfile import (cube_geometry, is_segy, open_cube, read_crossline,
-                                        read_inline, read_segy_section, write_segy_cube_like,
-                                        write_segy_like)
+                                         read_inline, read_segy_section, write_segy_cube_like,
+                                         write_segy_like)
+from demseis.evaluation.store_scoring import score_store
 from demseis.learning.train import build_unet, check_weights, predict_sections, train_unet
 
 #: the model file's format tag and version
@@ -52,6 +61,8 @@ VERSION = 1
 TOLERANCE_PX = 2
 #: the default square training crop, cut to the sections' smaller side on smaller stores
 DEFAULT_CROP = 96
+#: the threshold of a model file that carries none (made before models carried one)
+DEFAULT_THRESHOLD = 0.5
 #: prediction tiles (pixels, square) and their overlap, for sections larger than a tile
 TILE, OVERLAP = 512, 64
 
@@ -105,7 +116,8 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
                 save_every: int = 50, resume: bool = False, threads: int | None = None,
                 progress: bool = True, log: Callable[[str], None] | None = print,
                 weights: Sequence[float] | None = None, ignore: str | None = None,
-                ignore_values: Sequence[int] | None = None) -> dict[str, Any]:
+                ignore_values: Sequence[int] | None = None,
+                select: str = "ods_f1") -> dict[str, Any]:
     """Train the U-Net on ``store`` (or several stores) and write it to ``out``; return the
     held-out metrics.
 
@@ -135,6 +147,9 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
         non-zero) are left out of the training loss, in the stores that hold it
         (:func:`demseis.learning.train.train_unet`); the test metrics still score every
         pixel against ``fault``.
+    select : the validation score that picks the step kept: ``"ods_f1"`` (F1 at the
+        model's best threshold, the threshold then saved with it) or ``"f1"`` (F1 at 0.5, as
+        models were picked before they carried a threshold).
 
     Returns
     -------
@@ -142,8 +157,10 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
         ``precision``, ``recall``, ``f1``, ``iou``, ``ap`` (average precision over thresholds)
         on the test runs of every store pooled, at threshold 0.5 and :data:`TOLERANCE_PX`;
         ``per_store`` (the same per store, with its weight, share and training samples
-        drawn); ``stores`` and ``weights``; and the training settings. The same dict is
-        written to ``out.json`` and kept in the model file.
+        drawn); ``stores`` and ``weights``; the training settings; ``chosen_threshold``
+        (:func:`choose_threshold` on the validation runs: the threshold saved with the model)
+        and ``at_chosen_threshold`` (precision, recall, F1, IoU of the pooled test runs at
+        it). The same dict is written to ``out.json`` and kept in the model file.
     """
     torch = import_torch("demseis train")
     if steps < 1:
@@ -176,6 +193,7 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
     if ignore is not None:  # only then: the settings of a training without it stay as they were
         settings["ignore"] = [ignore, None if ignore_values is None
                               else [int(v) for v in ignore_values]]
+    settings["select"] = select
     state = None
     if resume:
         if not ckpt.is_file():
@@ -189,9 +207,10 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
             else check_weights(w_before, len(stores_before))
         if stores_before != resolved or before.get("base") != base or shares_before is None \
                 or not np.allclose(shares_before, shares) \
-                or before.get("ignore") != settings.get("ignore"):
+                or before.get("ignore") != settings.get("ignore") \
+                or before.get("select", "f1") != select:
             raise InputError(f"--resume: {str(ckpt)!r} was trained on other stores, weights, "
-                             "width or --ignore")
+                             "width, --ignore or --select")
         if int(state["step"]) >= steps:
             raise InputError(f"--resume: {str(ckpt)!r} has done {state['step']} steps already; "
                              "give a larger --steps")
@@ -204,12 +223,12 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
                              device=device, val_every=val_every or max(1, steps // 5),
                              patience=steps, log=log, progress=progress, resume=state,
                              save_every=save_every, save=save, weights=weights, ignore=ignore,
-                             ignore_values=ignore_values)
-    per_store, counts, n_test, n_runs = [], [], 0, 0
+                             ignore_values=ignore_values, select=select)
+    per_store, counts, n_test, n_runs, held = [], [], 0, 0, []
     for i, s in enumerate(stores):
         test = FaultSegDataset(s, inputs=("seismic",), targets=("fault",), split="test")
-        sections = np.stack([test[j][0][0].numpy() for j in range(len(test))])
-        prob = predict_sections(model, sections)
+        prob = predict_sections(model, _sections(test))
+        held.append((prob, s, test.indices))
         result = score_store(prob, s, indices=test.indices, threshold=0.5,
                              tolerance_px=TOLERANCE_PX)
         runs = int(len(np.unique(test.run_ids)))
@@ -223,14 +242,18 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
     o = summarise(SampleCounts.concat(counts))  # every store's test samples, pooled
     val_runs = sum(len(np.unique(FaultSegDataset(s, inputs=("seismic",), targets=("fault",),
                                                  split="val").run_ids)) for s in stores)
+    chosen = choose_threshold(model, stores)
     metrics = {**_scores(o), "threshold": 0.5, "tolerance_px": TOLERANCE_PX,
                "test_samples": n_test, "test_runs": n_runs,
                "train_runs": int(info["n_runs"]), "val_runs": int(val_runs),
                "device": info["device"],
                "steps": int(info["steps"]), "best_val_f1": info.get("best_val_f1"),
-               "best_step": info.get("best_step"), **settings, "per_store": per_store}
+               "best_step": info.get("best_step"), **settings, "per_store": per_store,
+               "chosen_threshold": chosen,
+               "at_chosen_threshold": _at_threshold(held, chosen["threshold"])}
     metrics["warnings"] = training_warnings(metrics)
     blob = {"format": FORMAT, "version": VERSION, "base": base, "target": "fault",
+            "threshold": chosen["threshold"],
             "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
             "metrics": metrics}
     _atomic_save(torch, blob, out)
@@ -245,6 +268,10 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
             f"({metrics['test_samples']} samples, tolerance {TOLERANCE_PX} px): "
             f"precision {metrics['precision']:.3f}  recall {metrics['recall']:.3f}  "
             f"F1 {metrics['f1']:.3f}  AP {metrics['ap']:.3f}")
+        a = metrics["at_chosen_threshold"]
+        log(f"threshold {a['threshold']:g} (best F1 on the validation runs, "
+            f"{chosen['f1']:.3f}): test runs at it: precision {a['precision']:.3f}  "
+            f"recall {a['recall']:.3f}  F1 {a['f1']:.3f}")
         log(f"wrote {out} and {metrics_path(out)}")
     return metrics
 
@@ -269,6 +296,98 @@ def training_warnings(metrics: dict[str, Any]) -> list[str]:
     if metrics.get("test_runs", 2) < 2:
         out.append(f"the test scores come from {metrics['test_runs']} run: a rough estimate")
     return out
+
+
+def _sections(ds: FaultSegDataset) -> np.ndarray:
+    """The seismic sections of a dataset, stacked (N, H, W)."""
+    return np.stack([ds[j][0][0].numpy() for j in range(len(ds))])
+
+
+def choose_threshold(model: Any, stores: str | Path | Sequence[str | Path],
+                     split: str = "val") -> dict[str, Any]:
+    """The probability threshold at which ``model`` finds the faults of ``stores`` best: the one
+    that maximises F1 at :data:`TOLERANCE_PX` on their ``split`` runs, pooled, over the
+    threshold sweep of :func:`demseis.evaluation.score` (0.01 to 0.99).
+
+    Returns ``{"threshold", "f1", "split", "samples", "runs", "tolerance_px"}``; the threshold
+    is :data:`DEFAULT_THRESHOLD` when no threshold finds a labelled fault (F1 0). InputError
+    when no store has a complete sample in ``split``.
+    """
+    stores = [stores] if isinstance(stores, (str, Path)) else list(stores)
+    counts, samples, runs = [], 0, 0
+    for s in stores:
+        ds = FaultSegDataset(s, inputs=("seismic",), targets=("fault",), split=split)
+        if len(ds) == 0:
+            continue
+        prob = predict_sections(model, _sections(ds))
+        counts.append(score_store(prob, s, indices=ds.indices, threshold=DEFAULT_THRESHOLD,
+                                  tolerance_px=TOLERANCE_PX).counts)
+        samples, runs = samples + len(ds), runs + int(len(np.unique(ds.run_ids)))
+    if not counts:
+        raise InputError(f"no complete sample in the {split} runs of "
+                         f"{', '.join(repr(str(s)) for s in stores)} to choose a threshold on")
+    o = summarise(SampleCounts.concat(counts))
+    found = float(o.ods_f1) > 0
+    return {"threshold": round(float(o.ods_threshold), 4) if found else DEFAULT_THRESHOLD,
+            "f1": _num(o.ods_f1), "split": split, "samples": samples, "runs": runs,
+            "tolerance_px": TOLERANCE_PX}
+
+
+def _test_probs(model: Any, stores: Sequence[str | Path]) -> list[tuple[Any, ...]]:
+    """(probabilities, store, sample indices) of the test runs of every store that has any."""
+    held = []
+    for s in stores:
+        ds = FaultSegDataset(s, inputs=("seismic",), targets=("fault",), split="test")
+        if len(ds):
+            held.append((predict_sections(model, _sections(ds)), s, ds.indices))
+    return held
+
+
+def _at_threshold(held: list[tuple[Any, ...]], threshold: float) -> dict[str, Any]:
+    """Precision, recall, F1 and IoU of the pooled ``held`` predictions (:func:`_test_probs`) at
+    ``threshold`` and :data:`TOLERANCE_PX`."""
+    if not held:
+        return {"threshold": threshold}
+    o = summarise(SampleCounts.concat([
+        score_store(p, s, indices=idx, threshold=threshold, tolerance_px=TOLERANCE_PX).counts
+        for p, s, idx in held]))
+    return {"threshold": threshold, **{k: v for k, v in _scores(o).items() if k != "ap"}}
+
+
+def model_threshold(model: Any) -> tuple[float, str]:
+    """The threshold of a model loaded by :func:`load_model`, and where it comes from: the one
+    chosen on its validation runs (:func:`choose_threshold`), or :data:`DEFAULT_THRESHOLD` for
+    a model file that carries none."""
+    t = getattr(model, "demseis_threshold", None)
+    if t is None:
+        return DEFAULT_THRESHOLD, "default; the model carries no threshold"
+    return float(t), "the model's"
+
+
+def set_threshold(path: str | Path, stores: str | Path | Sequence[str | Path], *,
+                  device: str | None = None) -> dict[str, Any]:
+    """Choose the threshold of the model file ``path`` on the validation runs of ``stores``
+    (:func:`choose_threshold`; give the stores it was trained on) and save it in the file, and
+    in its metrics JSON when there is one, with the stores' test runs scored at it
+    (``at_chosen_threshold``, as :func:`train_model` writes); return the choice. For models
+    made before :func:`train_model` chose one itself."""
+    torch = import_torch("demseis threshold")
+    net = load_model(path, device)
+    stores = [stores] if isinstance(stores, (str, Path)) else list(stores)
+    chosen = choose_threshold(net, stores)
+    at = _at_threshold(_test_probs(net, stores), chosen["threshold"])
+    blob = torch.load(str(path), map_location="cpu", weights_only=True)
+    blob["threshold"] = chosen["threshold"]
+    blob.setdefault("metrics", {}).update(chosen_threshold=chosen, at_chosen_threshold=at)
+    _atomic_save(torch, blob, Path(path))
+    js = metrics_path(path)
+    if js.is_file():
+        metrics = json.loads(js.read_text())
+        metrics.update(chosen_threshold=chosen, at_chosen_threshold=at)
+        tmp = js.with_name(f".{js.name}.tmp{os.getpid()}")
+        tmp.write_text(json.dumps(metrics, indent=2) + "\n")
+        os.replace(tmp, js)
+    return chosen
 
 
 def _scores(o: Any) -> dict[str, float]:
@@ -306,7 +425,9 @@ def pretrained_path() -> Path:
 
 def load_model(path: str | Path, device: str | None = None) -> Any:
     """The U-Net saved by :func:`train_model`, in eval mode on ``device`` (default: CUDA when
-    available); its ``demseis_metrics`` attribute holds the saved metrics."""
+    available); its ``demseis_metrics`` attribute holds the saved metrics, and
+    ``demseis_threshold`` its threshold (None when the file carries none;
+    :func:`model_threshold`)."""
     torch = import_torch("demseis predict")
     if not os.path.isfile(path):
         raise InputError(f"model {str(path)!r} does not exist")
@@ -327,6 +448,10 @@ def load_model(path: str | Path, device: str | None = None) -> Any:
     dev = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
     model.to(dev).eval()
     model.demseis_metrics = blob.get("metrics", {})
+    t = blob.get("threshold")
+    if t is not None and not (isinstance(t, float) and 0 < t < 1):
+        raise not_model
+    model.demseis_threshold = t
     return model
 
 
@@ -353,7 +478,8 @@ CUBE_BLOCK_BYTES = 16 * 2**20
 
 
 def predict_cube(model: Any, inp: str | Path, out: str | Path, *,
-                 progress: bool = False) -> Path:
+                 progress: bool = False, mask: str | Path | None = None,
+                 threshold: float = DEFAULT_THRESHOLD) -> Path:
     """Fault probability of a 3-D SEG-Y cube: every inline and every crossline predicted as a
     section (:func:`predict_array`), the two averaged at each sample, written to ``out`` (SEG-Y
     with the input's headers, or ``.npy`` (inlines, crosslines, samples)).
@@ -362,7 +488,9 @@ def predict_cube(model: Any, inp: str | Path, out: str | Path, *,
     a float32 ``.npy`` file beside ``out`` (as large as the cube; it becomes a ``.npy`` output,
     or is removed), and the crossline pass reads and rewrites them in blocks of crosslines of
     at most :data:`CUBE_BLOCK_BYTES`, with explicit reads and writes (no memory map, whose
-    pages would count against the process).
+    pages would count against the process). ``mask``: also write 1 where the probability
+    reaches ``threshold`` and 0 elsewhere (SEG-Y float32, or ``.npy`` uint8), an inline at a
+    time.
     """
     inp, out = Path(inp), Path(out)
     geom = cube_geometry(inp)
@@ -402,6 +530,12 @@ def predict_cube(model: Any, inp: str | Path, out: str | Path, *,
         finally:
             os.close(fd)
             bar.close()
+        if mask is not None:
+            binary = _Above(_InlineFile(work, offset, geom.shape), threshold)
+            if is_segy(mask):
+                write_segy_cube_like(binary, inp, mask)
+            else:
+                _write_npy_inlines(binary, Path(mask))
         if is_segy(out):
             write_segy_cube_like(_InlineFile(work, offset, geom.shape), inp, out)
         else:
@@ -424,6 +558,34 @@ class _InlineFile:
         with open(self.path, "rb") as f:
             f.seek(self.offset + int(k) * n_xl * n_s * 4)
             return np.fromfile(f, np.float32, n_xl * n_s).reshape(n_xl, n_s)
+
+
+class _Above:
+    """1 where an inline of ``cube`` (anything with ``shape`` and ``cube[k]``) reaches
+    ``threshold``, 0 elsewhere, as uint8."""
+
+    def __init__(self, cube: Any, threshold: float) -> None:
+        self.cube, self.threshold, self.shape = cube, threshold, cube.shape
+
+    def __getitem__(self, k: int) -> np.ndarray:
+        return (self.cube[k] >= self.threshold).astype(np.uint8)
+
+
+def _write_npy_inlines(cube: Any, out: Path) -> Path:
+    """``cube`` (anything with ``shape`` and a uint8 ``cube[k]``) to the ``.npy`` file ``out``,
+    an inline at a time, under a temporary name, then renamed."""
+    tmp = out.with_name(f".{out.name}.tmp{os.getpid()}.npy")
+    try:
+        with open(tmp, "wb") as f:
+            np.lib.format.write_array_header_1_0(f, {"descr": np.dtype(np.uint8).str,
+                                                     "fortran_order": False,
+                                                     "shape": tuple(cube.shape)})
+            for k in range(cube.shape[0]):
+                f.write(np.ascontiguousarray(cube[k], dtype=np.uint8).tobytes())
+        os.replace(tmp, out)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return out
 
 
 def _starts(n: int, tile: int, overlap: int) -> list[int]:
@@ -449,8 +611,33 @@ def _predict_one(model: Any, sec: np.ndarray, tile: int, overlap: int) -> np.nda
     return (total / count)[:h, :w]
 
 
+def check_outputs(inp: str | Path, out: str | Path, *, mask: str | Path | None = None,
+                  overwrite: bool = False, threshold: float | None = None) -> None:
+    """InputError naming the flag when :func:`predict_file` could not write ``out`` or
+    ``mask`` from ``inp`` (an existing file without ``overwrite``, a suffix it does not write,
+    SEG-Y output from other input, the mask on the output) or ``threshold`` is no probability;
+    checked before a model is loaded."""
+    inp, out = Path(inp), Path(out)
+    for flag, path in (("--out", out), ("--mask", mask)):
+        if path is None:
+            continue
+        path = Path(path)
+        if path.exists() and not overwrite:
+            raise InputError(f"{flag} {str(path)!r} exists; pass --overwrite to replace it")
+        if not (is_segy(path) or path.suffix == ".npy"):
+            raise InputError(f"{flag} {str(path)!r}: name a .sgy, .segy or .npy file")
+        if is_segy(path) and not is_segy(inp):
+            raise InputError(f"{flag} {str(path)!r}: SEG-Y output needs SEG-Y input (its "
+                             "headers)")
+    if mask is not None and Path(mask).resolve() == out.resolve():
+        raise InputError(f"--mask {str(mask)!r} is --out as well; name another file")
+    if threshold is not None and not 0 < threshold < 1:
+        raise InputError(f"--threshold {threshold!r}: expected a probability in (0, 1)")
+
+
 def predict_file(model: Any, inp: str | Path, out: str | Path, *, device: str | None = None,
-                 overwrite: bool = False, progress: bool = False) -> Path:
+                 overwrite: bool = False, progress: bool = False,
+                 mask: str | Path | None = None, threshold: float | None = None) -> Path:
     """Fault probability of the section(s) or cube in ``inp``, written to ``out``.
 
     Parameters
@@ -462,14 +649,15 @@ def predict_file(model: Any, inp: str | Path, out: str | Path, *, device: str | 
     out : ``.sgy`` / ``.segy`` (SEG-Y input only: the input's headers, float32 samples) or
         ``.npy`` (float32; (1, H, W) for a SEG-Y section, so that ``demseis score`` reads it;
         (inlines, crosslines, samples) for a cube; else the input's shape).
-    overwrite : replace an existing ``out``.
+    overwrite : replace an existing ``out`` (and ``mask``).
     progress : a progress bar over a cube's lines on stderr.
+    mask : also write the faults: 1 where the probability reaches ``threshold``, 0 elsewhere
+        (the same kinds of file and shapes as ``out``; ``.npy`` as uint8).
+    threshold : the probability the mask starts at, in (0, 1) (default: the model's,
+        :func:`model_threshold`).
     """
     inp, out = Path(inp), Path(out)
-    if out.exists() and not overwrite:
-        raise InputError(f"--out {str(out)!r} exists; pass --overwrite to replace it")
-    if not (is_segy(out) or out.suffix == ".npy"):
-        raise InputError(f"--out {str(out)!r}: name a .sgy, .segy or .npy file")
+    check_outputs(inp, out, mask=mask, overwrite=overwrite, threshold=threshold)
     cube = is_segy(inp) and cube_geometry(inp) is not None
     if cube:
         data = None
@@ -484,15 +672,20 @@ def predict_file(model: Any, inp: str | Path, out: str | Path, *, device: str | 
             raise InputError(f"{str(inp)!r}: cannot read as .npy ({exc})") from None
     else:
         raise InputError(f"{str(inp)!r}: give a SEG-Y (.sgy, .segy) or .npy file")
-    if is_segy(out) and not is_segy(inp):
-        raise InputError(f"--out {str(out)!r}: SEG-Y output needs SEG-Y input (its headers)")
     net = load_model(model, device) if isinstance(model, (str, Path)) else model
+    t = model_threshold(net)[0] if threshold is None else float(threshold)
     if cube:
-        return predict_cube(net, inp, out, progress=progress)
+        return predict_cube(net, inp, out, progress=progress, mask=mask, threshold=t)
     prob = predict_array(net, data)
-    if is_segy(out):
-        return write_segy_like(prob, inp, out)
     if is_segy(inp):
-        prob = prob[None]
-    np.save(out, prob.astype(np.float32))
+        prob = prob[None]  # (1, samples, traces): a section as demseis score reads it
+    for path, values in ((mask, None), (out, prob)):
+        if path is None:
+            continue
+        if values is None:
+            values = (prob >= t).astype(np.uint8)
+        if is_segy(path):
+            write_segy_like(values[0], inp, path)
+        else:
+            np.save(path, values if values.dtype == np.uint8 else values.astype(np.float32))
     return out

@@ -87,6 +87,10 @@ def predict_sections(model, sections: np.ndarray, batch: int = 4,
     return out
 
 
+#: the validation scores that can pick the model kept (``select``), as the log names them
+SELECT = {"f1": "F1", "ods_f1": "ODS F1"}
+
+
 def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = None,
                split: str = "train", target: str = "fault", crop: int = 96, batch: int = 8,
                base: int = 16, lr: float = 2e-3, seed: int = 0, threads: int | None = None,
@@ -99,7 +103,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
                save_every: int | None = None,
                save: Callable[[dict[str, Any]], None] | None = None,
                weights: Sequence[float] | None = None, ignore: str | None = None,
-               ignore_values: Sequence[int] | None = None) -> tuple[Any, dict[str, Any]]:
+               ignore_values: Sequence[int] | None = None,
+               select: str = "f1") -> tuple[Any, dict[str, Any]]:
     """Train :func:`build_unet` on random crops of a store's ``split``.
 
     Parameters
@@ -118,8 +123,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         each training crop.
     amp : CUDA mixed precision (autocast + gradient scaling); None = on when on CUDA.
     val_every : every this many steps, score whole sections of the ``val`` split (runs held
-        out of training, of every store) at tolerance 2 px (F1 at threshold 0.5); keep the
-        best model, write it to ``checkpoint`` (``torch.save`` of the state dict, when given),
+        out of training, of every store) at tolerance 2 px (by ``select``); keep the best
+        model, write it to ``checkpoint`` (``torch.save`` of the state dict, when given),
         and stop after ``patience`` evaluations without improvement. The returned model is the
         best one. None: no validation.
     progress : a progress bar on stderr (tqdm).
@@ -137,6 +142,10 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     threads : torch CPU threads (None: leave torch's setting).
     device : ``"cuda"``, ``"cpu"``... (None: CUDA when available).
     log : called with progress lines (None: silent).
+    select : the validation score that picks the model kept: ``"f1"`` at threshold 0.5, or
+        ``"ods_f1"``, F1 at the threshold best for that model (the threshold sweep of
+        :func:`demseis.evaluation.score`), for a model read at a threshold chosen on the
+        validation runs (:func:`demseis.learning.model.choose_threshold`).
 
     Returns
     -------
@@ -144,11 +153,13 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     n_runs, device, drawn_per_store (training samples drawn from each store, counted over the
     steps, a resumed training's included), with ``ignore`` ignored_fraction (the share of the
     first batches' pixels left out of the loss); with validation also best_val_f1 (pooled over
-    every store's val runs: the selection criterion), val_f1_per_store (each store's F1 of
+    every store's val runs: the ``select`` score), val_f1_per_store (each store's score of
     the kept model), best_step, stopped_early, val_history.
     """
     torch = import_torch("training")  # lazy: heavy (~2 s), see the module docstring
     data = torch.utils.data
+    if select not in SELECT:
+        raise InputError(f"select {select!r}: expected one of {', '.join(SELECT)}")
 
     if (steps is None) == (minutes is None):
         raise InputError("train_unet: give exactly one of steps or minutes")
@@ -235,8 +246,10 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
                   count_samples(predict_sections(model, x, device=str(dev)), y, 0.5, 2)
                   for x, y in zip(*val)]
         # pooled over every store's val sections: the selection criterion
-        f1 = float(summarise(SampleCounts.concat([c for c in counts if c is not None])).f1)
-        each = [None if c is None else round(float(summarise(c).f1), 4) for c in counts]
+        f1 = float(getattr(summarise(SampleCounts.concat([c for c in counts if c is not None])),
+                           select))
+        each = [None if c is None else round(float(getattr(summarise(c), select)), 4)
+                for c in counts]
         best["history"].append((step, round(f1, 4)))
         if f1 > best["f1"]:
             best.update(f1=f1, step=step, bad=0, per_store=each,
@@ -248,7 +261,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         if log:
             per = ", ".join("-" if x is None else f"{x:.4f}" for x in each)
             per = f"  (per store {per})" if len(each) > 1 else ""
-            log(f"  step {step:5d}  val F1@2 {f1:.4f}{per}  best {best['f1']:.4f} "
+            log(f"  step {step:5d}  val {SELECT[select]}@2 {f1:.4f}{per}  "
+                f"best {best['f1']:.4f} "
                 f"(step {best['step']})")
 
     if log and len(parts) > 1:

@@ -37,18 +37,28 @@ def _chain(store, tmp_path, capsys, steps: int) -> dict:
     sample = int(np.flatnonzero(demseis.open(store).done)[-1])
     sgy, pred = tmp_path / "in.sgy", tmp_path / "pred.sgy"
     assert main(["export-segy", str(store), "--sample", str(sample), "--out", str(sgy)]) == 0
+    # the threshold chosen on the validation runs is saved with the model and used by --mask
+    chosen = metrics["chosen_threshold"]
+    assert 0 < chosen["threshold"] < 1 and chosen["split"] == "val" and chosen["runs"] == 1
+    assert metrics["at_chosen_threshold"]["threshold"] == chosen["threshold"]
+    assert load_model(model, "cpu").demseis_threshold == chosen["threshold"]
+    mask = tmp_path / "mask.sgy"
     assert main(["predict", str(model), str(sgy), "--out", str(pred), "--device", "cpu",
-                 "--png", str(tmp_path / "pred.png")]) == 0
+                 "--png", str(tmp_path / "pred.png"), "--mask", str(mask)]) == 0
+    assert f"reaches {chosen['threshold']:g}, the model's" in capsys.readouterr().out
     assert (tmp_path / "pred.png").stat().st_size > 5_000   # the section with its prediction
     import segyio
 
     with segyio.open(str(sgy), ignore_geometry=True) as a, \
-            segyio.open(str(pred), ignore_geometry=True) as b:
+            segyio.open(str(pred), ignore_geometry=True) as b, \
+            segyio.open(str(mask), ignore_geometry=True) as m:
         assert b.tracecount == a.tracecount and len(b.samples) == len(a.samples)
         assert b.text[0] == a.text[0]
         assert all(dict(b.header[i]) == dict(a.header[i]) for i in range(a.tracecount))
+        assert all(dict(m.header[i]) == dict(a.header[i]) for i in range(a.tracecount))
         prob = b.trace.raw[:]
         assert 0.0 <= prob.min() and prob.max() <= 1.0
+        np.testing.assert_array_equal(m.trace.raw[:], prob >= chosen["threshold"])
     prefix = tmp_path / "pred.score"
     assert main(["score", str(pred), str(store), "--indices", str(sample), "--tolerance", "2",
                  "--out-prefix", str(prefix)]) == 0
@@ -212,9 +222,23 @@ def test_predict_a_3d_cube_along_inlines_and_crosslines(tmp_path, monkeypatch, s
         for k in range(a.tracecount):
             assert dict(b.header[k]) == dict(a.header[k])
         np.testing.assert_allclose(as_il_xl(b), 0.5 * (along_il + along_xl), atol=1e-5)
-    npy = predict_file(net, inp, tmp_path / "prob.npy")
-    np.testing.assert_allclose(np.load(npy), 0.5 * (along_il + along_xl), atol=1e-5)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["cube.sgy", "prob.npy", "prob.sgy"]
+    npy = predict_file(net, inp, tmp_path / "prob.npy", mask=tmp_path / "mask.npy",
+                       threshold=0.5)
+    prob = np.load(npy)
+    np.testing.assert_allclose(prob, 0.5 * (along_il + along_xl), atol=1e-5)
+    mask = np.load(tmp_path / "mask.npy")  # 0/1 at the threshold, inline by inline
+    assert mask.dtype == np.uint8 and mask.shape == prob.shape
+    np.testing.assert_array_equal(mask, prob >= 0.5)
+    t = float(np.median(prob))  # a threshold that splits this untrained model's output
+    predict_file(net, inp, tmp_path / "p2.sgy", mask=tmp_path / "mask.sgy", threshold=t)
+    with segyio.open(str(tmp_path / "p2.sgy")) as b, segyio.open(str(tmp_path / "mask.sgy")) as m:
+        assert list(m.ilines) == ilines and list(m.xlines) == xlines
+        assert all(dict(m.header[k]) == dict(b.header[k]) for k in range(b.tracecount))
+        got = as_il_xl(m)
+        np.testing.assert_array_equal(got, as_il_xl(b) >= t)
+        assert 0 < got.mean() < 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "cube.sgy", "mask.npy", "mask.sgy", "p2.sgy", "prob.npy", "prob.sgy"]
 
 
 def test_the_shipped_model_predicts_when_no_model_is_named(tmp_path, capsys):

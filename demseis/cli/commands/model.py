@@ -1,4 +1,4 @@
-"""The handlers of ``demseis train`` and ``predict``; their parsers are in
+"""The handlers of ``demseis train``, ``predict`` and ``threshold``; their parsers are in
 :mod:`demseis.cli.model`."""
 
 from __future__ import annotations
@@ -26,11 +26,12 @@ def _weights(text: str | None) -> list[float] | None:
 def cmd_train(args: argparse.Namespace) -> int:
     quiet = args.quiet
     ignore, ignore_values = parse_ignore(args.ignore)
-    metrics = train(args.store, args.out, weights=_weights(args.weights), steps=args.steps, crop=args.crop, batch=args.batch,
-          base=args.base, lr=args.lr, seed=args.seed, device=args.device,
-          val_every=args.val_every, save_every=args.save_every, resume=args.resume,
-          threads=args.threads, progress=not quiet and sys.stderr.isatty(),
-          log=None if quiet else print, ignore=ignore, ignore_values=ignore_values)
+    metrics = train(args.store, args.out, weights=_weights(args.weights), steps=args.steps,
+                    crop=args.crop, batch=args.batch, base=args.base, lr=args.lr,
+                    seed=args.seed, device=args.device, val_every=args.val_every,
+                    save_every=args.save_every, resume=args.resume, threads=args.threads,
+                    progress=not quiet and sys.stderr.isatty(), log=None if quiet else print,
+                    ignore=ignore, ignore_values=ignore_values, select=args.select)
     for text in metrics.get("warnings", []):
         print(f"demseis: warning: {text}", file=sys.stderr)
     return 0
@@ -47,9 +48,29 @@ def cmd_predict(args: argparse.Namespace) -> int:
         model, source = args.paths
     else:
         model, source = args.model, args.paths[0]
-    out = predict(model, source, args.out, device=args.device, overwrite=args.overwrite,
-                  progress=sys.stderr.isatty())
+    from demseis.learning.model import check_outputs, load_model, model_threshold, pretrained_path
+
+    check_outputs(source, args.out, mask=args.mask, overwrite=args.overwrite,
+                  threshold=args.threshold)
+    net = load_model(pretrained_path() if model is None else model, args.device)
+    threshold, how = model_threshold(net)
+    if args.threshold is not None:
+        threshold, how = args.threshold, "given"
+    out = predict(net, source, args.out, overwrite=args.overwrite, progress=sys.stderr.isatty(),
+                  mask=args.mask, threshold=threshold)
     print(f"wrote {out}")
+    if args.mask is not None:
+        print(f"wrote {args.mask} (1 where the probability reaches {threshold:g}, {how})")
     if args.png is not None:
-        print(f"wrote {plot_section(source, args.png, pred=out)}")
+        print(f"wrote {plot_section(source, args.png, pred=out, threshold=threshold, how=how)}")
+    return 0
+
+
+def cmd_threshold(args: argparse.Namespace) -> int:
+    from demseis.learning.model import set_threshold
+
+    chosen = set_threshold(args.model, args.store, device=args.device)
+    print(f"threshold {chosen['threshold']:g}: F1 {chosen['f1']:.3f} at "
+          f"{chosen['tolerance_px']} px on {chosen['samples']} samples of {chosen['runs']} "
+          f"validation run(s); saved in {args.model}")
     return 0
