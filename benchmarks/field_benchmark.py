@@ -60,7 +60,9 @@ run (models trained on denser labels give higher ones everywhere). So each model
 at one threshold chosen without field data, the one that maximises its F1 at 2 px on the
 held-out runs of its own training stores (pooled): the threshold, that held-out F1, F1 of every
 field set at each tolerance and the share of its pixels at or above it, and F3's share (all at
-field scale 1).
+field scale 1). A given model (``--model``) that carries a threshold (``demseis train`` chooses
+one on its validation runs and saves it) is read at that threshold the same way
+(``at_model_threshold``).
 
 Results accumulate in ``--results`` (JSON): a (training set, seed) already trained with the
 same configuration (stores, budget, device kind) is not retrained, and a score already there
@@ -354,8 +356,16 @@ def heldout_threshold_scores(model, item: dict, stores: list[str], tolerances: l
         return {"n_sections": 0}
     r = score_stack(held, truth, HELDOUT_TOL)
     thr = float(r.ods_threshold)
-    out = {"n_sections": len(held), "threshold": round(thr, 4),
-           f"heldout_f1_tol{HELDOUT_TOL:g}": round(float(r.ods_f1), 4), "field": {}}
+    return {"n_sections": len(held), "threshold": round(thr, 4),
+            f"heldout_f1_tol{HELDOUT_TOL:g}": round(float(r.ods_f1), 4),
+            **field_at_threshold(model, item, thr, tolerances, cache, probs)}
+
+
+def field_at_threshold(model, item: dict, thr: float, tolerances: list[float], cache: dict,
+                       probs: dict) -> dict:
+    """F1 of every field set of ``item`` at each tolerance and the share of its pixels at or
+    above ``thr`` (``field``), and F3's share (``f3_share``), all at field scale 1."""
+    out: dict = {"field": {}}
     for name, pairs in item["field"].items():
         key = ("field", name, "1")
         if key not in probs:
@@ -481,12 +491,18 @@ def model_line(arg: str, items: dict, tolerances: list[float]) -> dict:
     line = {"benchmark": "field_benchmark", "model": name, "path": str(path),
             "trained": {k: model.demseis_metrics.get(k) for k in ("steps", "base", "seed")},
             "field": {}, "f3": {}}
+    probs: dict = {}
     for key, item in items.items():
         # "auto" scales by the training stores' period, which a given model does not come with;
-        # nor does it come with held-out runs to choose a threshold on
+        # nor does it come with held-out runs: it is read at its own threshold, if it has one
+        if item["kind"] == "heldout_threshold" and model.demseis_threshold is not None:
+            line["at_model_threshold"] = {
+                "threshold": model.demseis_threshold,
+                **field_at_threshold(model, item, model.demseis_threshold, tolerances, cache,
+                                     probs)}
         if item["kind"] in ("synthetic", "heldout_threshold") or item.get("scale") == "auto":
             continue
-        got = item_scores(model, key, item, tolerances, 1.0, cache)
+        got = item_scores(model, key, item, tolerances, 1.0, cache, probs)
         got.pop("_prob", None)
         if item["kind"] == "f3":
             line["f3"][item["scale"]] = got

@@ -36,6 +36,20 @@ def _png(path: Path, arr: np.ndarray, mode: str) -> None:
     Image.fromarray(arr, mode).save(path)
 
 
+def _field_maps(common, root: Path, model) -> tuple[list, list]:
+    """The model's probabilities on the fixture's field set, and its thinned masks, as the
+    benchmark reads them."""
+    from demseis.learning.model import predict_array
+
+    maps, masks = [], []
+    for sec_path in sorted((root / "set").glob("seismic_*")):
+        mask_path = next((root / "set").glob(f"mask_{sec_path.stem[len('seismic_'):]}.*"))
+        sec, mask = common["read_pair"](sec_path, mask_path, thin_lines=True)
+        maps.append(predict_array(model, sec))
+        masks.append(mask)
+    return maps, masks
+
+
 @pytest.fixture(scope="module")
 def field(tmp_path_factory, tiny_store):
     """A field set in the tutorial-03 layout: seismic_<key>.png drawn 1.5 times the size of its
@@ -243,12 +257,7 @@ def test_field_sets_and_f3_at_the_threshold_chosen_on_held_out_runs(bench, commo
     assert at["threshold"]["mean"] == pytest.approx(thr, abs=1e-4)
     assert at["heldout_f1_tol2"]["mean"] == pytest.approx(float(ref.ods_f1), abs=1e-4)
 
-    maps, masks = [], []
-    for sec_path in sorted((root / "set").glob("seismic_*")):
-        mask_path = next((root / "set").glob(f"mask_{sec_path.stem[len('seismic_'):]}.*"))
-        sec, mask = common["read_pair"](sec_path, mask_path, thin_lines=True)
-        maps.append(predict_array(model, sec))
-        masks.append(mask)
+    maps, masks = _field_maps(common, root, model)
     for tol in (3, 2):
         want = score(np.stack(maps), np.stack(masks).astype(np.uint8), threshold=thr,
                      tolerance_px=float(tol)).f1
@@ -291,6 +300,37 @@ def test_a_given_model_is_scored_without_training(bench, field, tmp_path, capsys
     assert set(line["f3"]) == {"1"} and "training " not in out.err
 
 
+def test_a_given_model_is_read_at_its_own_threshold(bench, common, field, tmp_path, capsys):
+    """A given model that carries a threshold (demseis train saves the one chosen on its
+    validation runs) gets at_model_threshold: the field set's F1 at each tolerance, its share
+    at or above the threshold and F3's, recomputed here with demseis.evaluation.score."""
+    import torch
+
+    from demseis.evaluation import score
+    from demseis.learning.model import load_model, predict_array, pretrained_path
+
+    root, _ = field
+    blob = torch.load(pretrained_path(), map_location="cpu", weights_only=True)
+    path = tmp_path / "m.pt"
+    torch.save({**blob, "threshold": 0.3}, path)
+    argv = ["--model", f"m={path}", "--field-dir", str(root / "set"), "--f3",
+            str(root / "f3.sgy"), "--field-scale", "1", "--results", str(tmp_path / "r.json"),
+            "--cache", str(tmp_path / "c")]
+    assert bench["main"](argv) == 0
+    at = json.loads(capsys.readouterr().out.strip())["at_model_threshold"]
+    model = load_model(path, "cpu")
+    maps, masks = _field_maps(common, root, model)
+    assert at["threshold"] == 0.3
+    for tol in (3, 2):
+        want = score(np.stack(maps), np.stack(masks).astype(np.uint8), threshold=0.3,
+                     tolerance_px=float(tol)).f1
+        assert at["field"]["set"][f"f1_tol{tol}"] == pytest.approx(float(want), abs=1e-4)
+    assert at["field"]["set"]["share"] == pytest.approx(
+        float(np.mean([(m >= 0.3).mean() for m in maps])), abs=1e-4)
+    f3 = predict_array(model, common["read_section"](root / "f3.sgy", "--f3"))
+    assert at["f3_share"] == pytest.approx(float((f3 >= 0.3).mean()), abs=1e-4)
+
+
 def test_learning_curve_trains_on_the_first_train_runs(bench, field, tmp_path, capsys,
                                                         monkeypatch):
     """--train-runs: one model per N, each trained on the store's first N train runs only (the
@@ -331,3 +371,46 @@ def test_learning_curve_trains_on_the_first_train_runs(bench, field, tmp_path, c
     assert lines[0]["synthetic"].keys() == lines[1]["synthetic"].keys() == {"kin"}
     with pytest.raises(InputError, match="one-store training sets"):
         bench["learning_curve_sets"]({"m": (["a", "b"], [1.0, 1.0])}, [1])
+
+
+def test_model_threshold_benchmark_reads_at_half_the_model_and_otsu(common, field, tmp_path,
+                                                                    capsys):
+    """benchmarks/model_threshold.py: F1 of the field set at 0.5, at the model's threshold and
+    at Otsu's threshold of each section, and F3's shares, recomputed here with
+    demseis.evaluation.score; a group line averages the models named it and a seed."""
+    import torch
+
+    from demseis.evaluation import score
+    from demseis.learning.model import load_model, predict_array, pretrained_path
+    from demseis.plotting import otsu_threshold
+
+    mt = runpy.run_path(str(BENCH.with_name("model_threshold.py")), run_name="model_threshold")
+    root, _ = field
+    blob = torch.load(pretrained_path(), map_location="cpu", weights_only=True)
+    paths = []
+    for k, t in enumerate((0.3, 0.8)):
+        paths.append(tmp_path / f"m{k}.pt")
+        torch.save({**blob, "threshold": t}, paths[-1])
+    assert mt["main"]([f"m{k}={p}" for k, p in enumerate(paths)] + [
+        "--field-dir", str(root / "set"), "--f3", str(root / "f3.sgy"), "--group", "m"]) == 0
+    lines = [json.loads(x) for x in capsys.readouterr().out.strip().splitlines()]
+    assert [x.get("model", x.get("group")) for x in lines] == ["m0", "m1", "m"]
+    model = load_model(paths[0], "cpu")
+    maps, masks = _field_maps(common, root, model)
+    f3 = predict_array(model, common["read_section"](root / "f3.sgy", "--f3"))
+    for line, t in zip(lines, (0.3, 0.8)):
+        got = line["field"]["set"]
+        assert line["threshold"] == t
+        for rule, ts in (("0.5", [0.5] * len(maps)), ("model", [t] * len(maps)),
+                         ("otsu", [otsu_threshold(m) for m in maps])):
+            marks = np.stack([m >= x for m, x in zip(maps, ts)]).astype(np.float32)
+            want = score(marks, np.stack(masks).astype(np.uint8), tolerance_px=3.0).f1
+            assert got[f"f1_at_{rule}"] == pytest.approx(float(want), abs=1e-4)
+            assert got[f"share_at_{rule}"] == pytest.approx(float(marks.mean()), abs=1e-4)
+        assert line["f3"]["share_at_model"] == pytest.approx(float((f3 >= t).mean()), abs=1e-4)
+    assert lines[0]["f3"]["share_at_0.5"] == pytest.approx(float((f3 >= 0.5).mean()), abs=1e-4)
+    group = lines[2]["field"]["set"]
+    assert group["f1_at_model"] == pytest.approx(
+        np.mean([x["field"]["set"]["f1_at_model"] for x in lines[:2]]), abs=1e-4)
+    d = [x["field"]["set"]["f1_at_model"] - x["field"]["set"]["f1_at_0.5"] for x in lines[:2]]
+    assert group["model_minus_0.5"]["higher"] == sum(v > 0 for v in d)
