@@ -250,6 +250,10 @@ def test_the_shipped_model_predicts_when_no_model_is_named(tmp_path, capsys):
     assert shipped.stat().st_size < 10 * 2**20
     net = load_model(shipped, "cpu")
     assert net.demseis_metrics["steps"] == 1200
+    # its threshold, chosen on its validation runs, in the file and in the JSON beside it
+    assert 0 < net.demseis_threshold < 1
+    assert net.demseis_threshold == net.demseis_metrics["chosen_threshold"]["threshold"]
+    assert json.loads(shipped.with_suffix(".json").read_text()) == net.demseis_metrics
     sec = np.random.default_rng(0).normal(size=(40, 56)).astype(np.float32)
     np.save(tmp_path / "s.npy", sec)
     assert main(["predict", str(tmp_path / "s.npy"), "--out", str(tmp_path / "a.npy"),
