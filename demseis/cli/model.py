@@ -1,7 +1,6 @@
 """``demseis train``, ``predict`` and ``threshold``: a fault-segmentation U-Net from a store,
 the fault probability of any section (SEG-Y or .npy) with it, and the threshold its faults are
-drawn from. They need torch (the ``[torch]``
-extra); see :mod:`demseis.learning.model`."""
+drawn from. They need torch (the ``[torch]`` extra); see :mod:`demseis.learning.model`."""
 
 from __future__ import annotations
 
