@@ -8,6 +8,8 @@ import sys
 
 from demseis.api import predict, train
 from demseis.errors import InputError
+from demseis.learning.model import (check_outputs, load_model, model_threshold, pretrained_path,
+                                    set_threshold)
 from demseis.learning.train import parse_ignore
 from demseis.plotting import plot_section
 
@@ -48,8 +50,6 @@ def cmd_predict(args: argparse.Namespace) -> int:
         model, source = args.paths
     else:
         model, source = args.model, args.paths[0]
-    from demseis.learning.model import check_outputs, load_model, model_threshold, pretrained_path
-
     check_outputs(source, args.out, mask=args.mask, overwrite=args.overwrite,
                   threshold=args.threshold)
     net = load_model(pretrained_path() if model is None else model, args.device)
@@ -67,8 +67,6 @@ def cmd_predict(args: argparse.Namespace) -> int:
 
 
 def cmd_threshold(args: argparse.Namespace) -> int:
-    from demseis.learning.model import set_threshold
-
     chosen = set_threshold(args.model, args.store, device=args.device)
     print(f"threshold {chosen['threshold']:g}: F1 {chosen['f1']:.3f} at "
           f"{chosen['tolerance_px']} px on {chosen['samples']} samples of {chosen['runs']} "
