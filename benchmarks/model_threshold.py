@@ -45,24 +45,26 @@ def readings(model, sets: dict, f3: np.ndarray | None, tolerance: float) -> dict
     from demseis.plotting import otsu_threshold
 
     t_model = model_threshold(model)[0]
+
+    def marked(rule: str, p: np.ndarray) -> np.ndarray:
+        """``p`` >= the rule's threshold, as 0/1 (Otsu's differs per section)."""
+        t = otsu_threshold(p) if rule == "otsu" else (t_model if rule == "model" else 0.5)
+        return (p >= t).astype(np.float32)
+
     out: dict = {"threshold": t_model, "field": {}}
     for name, pairs in sets.items():
         probs = [predict_array(model, sec) for sec, _ in pairs]
         truth = [mask for _, mask in pairs]
         got = {}
-        for rule in RULES:
-            # every rule as 0/1 maps scored at 0.5: Otsu's threshold differs per section
-            ts = [otsu_threshold(p) if rule == "otsu" else (t_model if rule == "model" else 0.5)
-                  for p in probs]
-            marks = [(p >= t).astype(np.float32) for p, t in zip(probs, ts)]
+        for rule in RULES:  # every rule as 0/1 maps, scored at 0.5
+            marks = [marked(rule, p) for p in probs]
             got[f"f1_at_{rule}"] = round(float(score_stack(marks, truth, tolerance).f1), 4)
             got[f"share_at_{rule}"] = round(float(np.mean([m.mean() for m in marks])), 5)
         out["field"][name] = got
     if f3 is not None:
         p = predict_array(model, f3)
-        out["f3"] = {f"share_at_{rule}": round(float(
-            (p >= (otsu_threshold(p) if rule == "otsu" else
-                   (t_model if rule == "model" else 0.5))).mean()), 5) for rule in RULES}
+        out["f3"] = {f"share_at_{rule}": round(float(marked(rule, p).mean()), 5)
+                     for rule in RULES}
     return out
 
 
@@ -73,8 +75,8 @@ def in_group(name: str, prefix: str) -> bool:
 
 
 def group_line(prefix: str, lines: list[dict]) -> dict:
-    """Means over the models named ``prefix`` and a number, and the model's threshold minus each other
-    rule per model (mean, and in how many models it is higher)."""
+    """Means over the models named ``prefix`` and a number, and the model's threshold minus
+    each other rule per model (mean, and in how many models it is higher)."""
     mine = [x for x in lines if in_group(x["model"], prefix)]
     out: dict = {"group": prefix, "models": [x["model"] for x in mine],
                  "threshold": round(float(np.mean([x["threshold"] for x in mine])), 4),

@@ -228,7 +228,7 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
     for i, s in enumerate(stores):
         test = FaultSegDataset(s, inputs=("seismic",), targets=("fault",), split="test")
         prob = predict_sections(model, _sections(test))
-        held.append((prob, s, test.indices))
+        held.append((prob, s, test))
         result = score_store(prob, s, indices=test.indices, threshold=0.5,
                              tolerance_px=TOLERANCE_PX)
         runs = int(len(np.unique(test.run_ids)))
@@ -315,11 +315,7 @@ def choose_threshold(model: Any, stores: str | Path | Sequence[str | Path],
     """
     stores = [stores] if isinstance(stores, (str, Path)) else list(stores)
     counts, samples, runs = [], 0, 0
-    for s in stores:
-        ds = FaultSegDataset(s, inputs=("seismic",), targets=("fault",), split=split)
-        if len(ds) == 0:
-            continue
-        prob = predict_sections(model, _sections(ds))
+    for prob, s, ds in _split_probs(model, stores, split):
         counts.append(score_store(prob, s, indices=ds.indices, threshold=DEFAULT_THRESHOLD,
                                   tolerance_px=TOLERANCE_PX).counts)
         samples, runs = samples + len(ds), runs + int(len(np.unique(ds.run_ids)))
@@ -333,24 +329,25 @@ def choose_threshold(model: Any, stores: str | Path | Sequence[str | Path],
             "tolerance_px": TOLERANCE_PX}
 
 
-def _test_probs(model: Any, stores: Sequence[str | Path]) -> list[tuple[Any, ...]]:
-    """(probabilities, store, sample indices) of the test runs of every store that has any."""
-    held = []
+def _split_probs(model: Any, stores: Sequence[str | Path],
+                 split: str) -> list[tuple[np.ndarray, str | Path, FaultSegDataset]]:
+    """(probabilities, store, dataset) of the ``split`` runs of every store that has any."""
+    out = []
     for s in stores:
-        ds = FaultSegDataset(s, inputs=("seismic",), targets=("fault",), split="test")
+        ds = FaultSegDataset(s, inputs=("seismic",), targets=("fault",), split=split)
         if len(ds):
-            held.append((predict_sections(model, _sections(ds)), s, ds.indices))
-    return held
+            out.append((predict_sections(model, _sections(ds)), s, ds))
+    return out
 
 
 def _at_threshold(held: list[tuple[Any, ...]], threshold: float) -> dict[str, Any]:
-    """Precision, recall, F1 and IoU of the pooled ``held`` predictions (:func:`_test_probs`) at
-    ``threshold`` and :data:`TOLERANCE_PX`."""
+    """Precision, recall, F1 and IoU of the pooled ``held`` predictions (probabilities, store,
+    dataset: :func:`_split_probs`) at ``threshold`` and :data:`TOLERANCE_PX`."""
     if not held:
         return {"threshold": threshold}
     o = summarise(SampleCounts.concat([
-        score_store(p, s, indices=idx, threshold=threshold, tolerance_px=TOLERANCE_PX).counts
-        for p, s, idx in held]))
+        score_store(p, s, indices=ds.indices, threshold=threshold,
+                    tolerance_px=TOLERANCE_PX).counts for p, s, ds in held]))
     return {"threshold": threshold, **{k: v for k, v in _scores(o).items() if k != "ap"}}
 
 
@@ -375,7 +372,7 @@ def set_threshold(path: str | Path, stores: str | Path | Sequence[str | Path], *
     net = load_model(path, device)
     stores = [stores] if isinstance(stores, (str, Path)) else list(stores)
     chosen = choose_threshold(net, stores)
-    at = _at_threshold(_test_probs(net, stores), chosen["threshold"])
+    at = _at_threshold(_split_probs(net, stores, "test"), chosen["threshold"])
     blob = torch.load(str(path), map_location="cpu", weights_only=True)
     blob["threshold"] = chosen["threshold"]
     blob.setdefault("metrics", {}).update(chosen_threshold=chosen, at_chosen_threshold=at)
