@@ -443,6 +443,7 @@ def summary_line(name: str, cells: list[dict], items: dict, config: dict) -> dic
                 "steps", "base", "crop", "batch", "lr", "device")},
             **({"train_runs": config["train_runs"]} if "train_runs" in config else {}),
             **({"ignore": config["ignore"]} if "ignore" in config else {}),
+            **({"pos_weight": config["pos_weight"]} if "pos_weight" in config else {}),
             "machine": " | ".join(sorted({c.get("machine", config["machine"]) for c in cells})),
             "train_seconds": stats([c["train"]["seconds"] for c in cells]),
             "score_seconds": stats([c["score_seconds"] for c in cells if "score_seconds" in c]),
@@ -596,6 +597,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                     help="train with the pixels of this label array (with these values; "
                          "default any non-zero) left out of the loss, in the stores that hold "
                          "it (fault_uncertain: train_unet(ignore=))")
+    ap.add_argument("--pos-weight", type=float, metavar="W",
+                    help="the fault pixels' weight in the cross-entropy (train_unet(pos_weight=)"
+                         "; default: the background / fault ratio, capped at 50)")
     args = ap.parse_args(argv)
     from demseis.errors import InputError
     from demseis.learning.train import parse_ignore
@@ -674,6 +678,8 @@ def main(argv: list[str] | None = None) -> int:
                   "test_fraction": args.test_fraction}
         if args.ignore:  # only then in the config: the fingerprints without it stay
             config["ignore"] = [args.ignore, args.ignore_values]
+        if args.pos_weight is not None:  # likewise
+            config["pos_weight"] = args.pos_weight
         where = None
         if name in limits:  # only then in the config: the fingerprints of full sets stay
             config["train_runs"] = limits[name]
@@ -706,7 +712,8 @@ def main(argv: list[str] | None = None) -> int:
                                          device=device, split_fractions=fr, log=None,
                                          augment=True, amp=cuda, weights=weights,
                                          where=where, ignore=args.ignore,
-                                         ignore_values=args.ignore_values)
+                                         ignore_values=args.ignore_values,
+                                         pos_weight=args.pos_weight)
                 torch.save(model.state_dict(), saved)
                 results["cells"] = [c for c in results["cells"]
                                     if not (c["config"] == fp and c["seed"] == seed)]

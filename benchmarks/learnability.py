@@ -78,6 +78,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--score-without", metavar="ARRAY[=V,V]",
                     help="also score with these pixels left out (prediction 0 and no label "
                          "there): the *_kept figures")
+    ap.add_argument("--pos-weight", type=float, metavar="W",
+                    help="the fault pixels' weight in the cross-entropy (train_unet(pos_weight=)"
+                         "; default: the background / fault ratio, at most 50)")
     args = ap.parse_args(argv)
 
     import torch
@@ -105,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
                              base=base, lr=args.lr, seed=args.seed, threads=args.threads,
                              device=args.device, split_fractions=fr, log=None, where=where,
                              progress=not args.no_progress, ignore=ignore,
-                             ignore_values=ignore_values)
+                             ignore_values=ignore_values, pos_weight=args.pos_weight)
     out: dict = {"benchmark": "learnability", "store": args.store, "steps": info["steps"],
                  "base": base, "crop": args.crop, "batch": args.batch, "seed": args.seed,
                  "device": info["device"], "train_seconds": info["seconds"],

@@ -117,7 +117,7 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
                 progress: bool = True, log: Callable[[str], None] | None = print,
                 weights: Sequence[float] | None = None, ignore: str | None = None,
                 ignore_values: Sequence[int] | None = None,
-                select: str = "ods_f1") -> dict[str, Any]:
+                select: str = "ods_f1", pos_weight: float | None = None) -> dict[str, Any]:
     """Train the U-Net on ``store`` (or several stores) and write it to ``out``; return the
     held-out metrics.
 
@@ -150,6 +150,9 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
     select : the validation score that picks the step kept: ``"ods_f1"`` (F1 at the
         model's best threshold, the threshold then saved with it) or ``"f1"`` (F1 at 0.5, as
         models were picked before they carried a threshold).
+    pos_weight : the weight of fault pixels in the training loss (None: the background /
+        fault ratio of the first batches, at most 50;
+        :func:`demseis.learning.train.train_unet`).
 
     Returns
     -------
@@ -157,7 +160,8 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
         ``precision``, ``recall``, ``f1``, ``iou``, ``ap`` (average precision over thresholds)
         on the test runs of every store pooled, at threshold 0.5 and :data:`TOLERANCE_PX`;
         ``per_store`` (the same per store, with its weight, share and training samples
-        drawn); ``stores`` and ``weights``; the training settings; ``chosen_threshold``
+        drawn); ``stores`` and ``weights``; the training settings; ``pos_weight`` (the loss's
+        weight of fault pixels, given or measured); ``chosen_threshold``
         (:func:`choose_threshold` on the validation runs: the threshold saved with the model)
         and ``at_chosen_threshold`` (precision, recall, F1, IoU of the pooled test runs at
         it). The same dict is written to ``out.json`` and kept in the model file.
@@ -170,6 +174,8 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
             raise InputError(f"--{name} {value}: use at least 1")
     if val_every is not None and val_every < 1:
         raise InputError(f"--val-every {val_every}: use at least 1")
+    if pos_weight is not None and not (np.isfinite(pos_weight) and pos_weight > 0):
+        raise InputError(f"--pos-weight {pos_weight}: use a number > 0")
     stores = [str(s) for s in store] if isinstance(store, (list, tuple)) else [str(store)]
     if not stores:
         raise InputError("no store to train on")
@@ -194,6 +200,8 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
         settings["ignore"] = [ignore, None if ignore_values is None
                               else [int(v) for v in ignore_values]]
     settings["select"] = select
+    if pos_weight is not None:  # likewise
+        settings["pos_weight"] = float(pos_weight)
     state = None
     if resume:
         if not ckpt.is_file():
@@ -208,9 +216,10 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
         if stores_before != resolved or before.get("base") != base or shares_before is None \
                 or not np.allclose(shares_before, shares) \
                 or before.get("ignore") != settings.get("ignore") \
-                or before.get("select", "f1") != select:
+                or before.get("select", "f1") != select \
+                or before.get("pos_weight") != settings.get("pos_weight"):
             raise InputError(f"--resume: {str(ckpt)!r} was trained on other stores, weights, "
-                             "width, --ignore or --select")
+                             "width, --ignore, --select or --pos-weight")
         if int(state["step"]) >= steps:
             raise InputError(f"--resume: {str(ckpt)!r} has done {state['step']} steps already; "
                              "give a larger --steps")
@@ -223,7 +232,8 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
                              device=device, val_every=val_every or max(1, steps // 5),
                              patience=steps, log=log, progress=progress, resume=state,
                              save_every=save_every, save=save, weights=weights, ignore=ignore,
-                             ignore_values=ignore_values, select=select)
+                             ignore_values=ignore_values, select=select,
+                             pos_weight=pos_weight)
     per_store, counts, n_test, n_runs, held = [], [], 0, 0, []
     for i, s in enumerate(stores):
         test = FaultSegDataset(s, inputs=("seismic",), targets=("fault",), split="test")
@@ -248,7 +258,8 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
                "train_runs": int(info["n_runs"]), "val_runs": int(val_runs),
                "device": info["device"],
                "steps": int(info["steps"]), "best_val_f1": info.get("best_val_f1"),
-               "best_step": info.get("best_step"), **settings, "per_store": per_store,
+               "best_step": info.get("best_step"), **settings,
+               "pos_weight": float(info["pos_weight"]), "per_store": per_store,
                "chosen_threshold": chosen,
                "at_chosen_threshold": _at_threshold(held, chosen["threshold"])}
     metrics["warnings"] = training_warnings(metrics)

@@ -104,7 +104,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
                save: Callable[[dict[str, Any]], None] | None = None,
                weights: Sequence[float] | None = None, ignore: str | None = None,
                ignore_values: Sequence[int] | None = None,
-               select: str = "f1") -> tuple[Any, dict[str, Any]]:
+               select: str = "f1", pos_weight: float | None = None
+               ) -> tuple[Any, dict[str, Any]]:
     """Train :func:`build_unet` on random crops of a store's ``split``.
 
     Parameters
@@ -119,6 +120,10 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         that holds it; stores without it train on every pixel. ``"fault_uncertain"``
         (``[labels] fault_uncertain = true``) marks where the fault label and the section's
         visible offsets disagree. None: every pixel counts.
+    pos_weight : the weight of fault pixels in the binary cross-entropy. None: the background /
+        fault pixel ratio of the first 8 batches (kept pixels only), capped at 50, which makes
+        the probabilities of faint faults high (a model is then read at a threshold well above
+        0.5). 1: unweighted, the loss whose probabilities estimate the chance of a label.
     augment : random left-right flips, polarity flips and amplitude scaling (x 0.5 .. 2) of
         each training crop.
     amp : CUDA mixed precision (autocast + gradient scaling); None = on when on CUDA.
@@ -160,6 +165,9 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     data = torch.utils.data
     if select not in SELECT:
         raise InputError(f"select {select!r}: expected one of {', '.join(SELECT)}")
+    if pos_weight is not None and not (np.isfinite(pos_weight) and pos_weight > 0):
+        raise InputError(f"pos_weight = {pos_weight}; allowed: a number > 0 (or None: the "
+                         "background / fault ratio)")
 
     if (steps is None) == (minutes is None):
         raise InputError("train_unet: give exactly one of steps or minutes")
@@ -205,7 +213,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
             kept = sum(float(k.sum()) for _, k in first)
             frac = sum(float(((y > 0) & k).sum()) for y, k in first) / max(kept, 1.0)
             ignored_fraction = 1.0 - kept / max(sum(k.numel() for _, k in first), 1)
-        pos_weight = torch.tensor(min((1 - frac) / max(frac, 1e-6), 50.0), device=dev)
+        ratio = min((1 - frac) / max(frac, 1e-6), 50.0) if pos_weight is None else pos_weight
+        pos_weight = torch.tensor(float(ratio), device=dev)
         draws.counts[:] = 0  # those batches were looked at, not trained on
     else:
         frac = float(resume["fault_fraction"])

@@ -171,6 +171,14 @@ def test_whole_benchmark_on_tiny_stores(bench, field, tiny_store, tmp_path, caps
     out = capsys.readouterr()
     assert "training " not in out.err
     assert "ods_f1_tol1" in json.loads(out.out.splitlines()[0])["field"]["set"]["auto"]
+    # a fixed loss weight is another training: trained anew, recorded in the line and cells
+    argv[argv.index("--seeds") + 1: argv.index("--seeds") + 4] = ["0"]
+    assert bench["main"](argv[:-2] + ["--pos-weight", "1"]) == 0
+    out = capsys.readouterr()
+    assert out.err.count("training ") == 3
+    assert all(json.loads(x)["pos_weight"] == 1.0 for x in out.out.strip().splitlines())
+    cells = json.loads(results.read_text())["cells"]
+    assert sorted(c["train"]["pos_weight"] == 1.0 for c in cells) == [False] * 9 + [True] * 3
 
 
 def test_input_errors(bench, common, field, tmp_path):

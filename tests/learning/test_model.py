@@ -84,6 +84,23 @@ def test_resume_goes_on_from_the_checkpoint(tiny_store, tmp_path, capsys):
     assert main(["train", str(tiny_store), "--out", str(tmp_path / "x.pt"), "--resume",
                  *FAST]) == 2
     assert "no training state" in capsys.readouterr().err
+    # the loss's weight of fault pixels, measured (the background / fault ratio, at most 50)
+    assert 1.0 < json.loads(model.with_suffix(".json").read_text())["pos_weight"] <= 50.0
+
+
+def test_pos_weight_is_recorded_and_resume_keeps_it(tiny_store, tmp_path, capsys):
+    """--pos-weight reaches the loss (train_unet's info), the model's JSON records it, and a
+    checkpoint trained with it resumes only with the same weight."""
+    model = tmp_path / "w.pt"
+    args = ["train", str(tiny_store), "--out", str(model), "--save-every", "2", *FAST]
+    assert main([*args, "--steps", "2", "--pos-weight", "3"]) == 0
+    saved = json.loads(model.with_suffix(".json").read_text())
+    assert saved["pos_weight"] == 3.0
+    assert main([*args, "--steps", "4", "--resume"]) == 2
+    assert "--pos-weight" in capsys.readouterr().err
+    assert main([*args, "--steps", "4", "--resume", "--pos-weight", "3"]) == 0
+    assert main([*args, "--steps", "2", "--pos-weight", "0", "--out", str(tmp_path / "z.pt")]) == 2
+    assert "--pos-weight 0.0: use a number > 0" in capsys.readouterr().err
 
 
 def test_api_train_and_predict(tiny_store, tmp_path):

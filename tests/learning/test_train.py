@@ -38,6 +38,34 @@ def test_train_unet_fixed_steps_is_repeatable(tmp_path):
         predict_sections(build_unet(4), x[0])
 
 
+def test_pos_weight_is_the_loss_weight_and_keeps_the_crops(tmp_path):
+    """A given pos_weight replaces the measured ratio in the loss and nothing else: the measured
+    ratio given explicitly trains the same weights, another value other weights."""
+    store = tmp_path / "tiny.zarr"
+    toy_store(store)
+    kw = dict(steps=3, crop=16, batch=4, base=4, threads=1, device="cpu", log=None)
+    m_auto, info = train_unet(store, **kw)
+    ratio = info["pos_weight"]
+    assert ratio > 1  # faults are rare in the toy store
+    m_same, info_same = train_unet(store, pos_weight=float(ratio), **kw)
+    m_one, info_one = train_unet(store, pos_weight=1.0, **kw)
+    assert info_one["pos_weight"] == 1.0 and info_same["pos_weight"] == ratio
+
+    def params(m):
+        return np.concatenate([p.detach().numpy().ravel() for p in m.parameters()])
+
+    # the ratio is recorded rounded to 2 decimals: the same loss and weights to that precision
+    assert info_same["final_loss"] == pytest.approx(info["final_loss"], rel=1e-3)
+    same = np.abs(params(m_same) - params(m_auto)).max()
+    other = np.abs(params(m_one) - params(m_auto)).max()
+    assert same < 1e-4 < other
+    # the weighted cross-entropy of rare faults is larger than the unweighted one
+    assert info_one["final_loss"] < info["final_loss"]
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(InputError, match="pos_weight"):
+            train_unet(store, pos_weight=bad, **kw)
+
+
 def test_learnability_benchmark_prints_one_json_line(tmp_path, capsys):
     store = tmp_path / "tiny.zarr"
     toy_store(store)

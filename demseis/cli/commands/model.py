@@ -33,7 +33,8 @@ def cmd_train(args: argparse.Namespace) -> int:
                     seed=args.seed, device=args.device, val_every=args.val_every,
                     save_every=args.save_every, resume=args.resume, threads=args.threads,
                     progress=not quiet and sys.stderr.isatty(), log=None if quiet else print,
-                    ignore=ignore, ignore_values=ignore_values, select=args.select)
+                    ignore=ignore, ignore_values=ignore_values, select=args.select,
+                    pos_weight=args.pos_weight)
     for text in metrics.get("warnings", []):
         print(f"demseis: warning: {text}", file=sys.stderr)
     return 0
