@@ -179,6 +179,25 @@ def test_whole_benchmark_on_tiny_stores(bench, field, tiny_store, tmp_path, caps
     assert all(json.loads(x)["pos_weight"] == 1.0 for x in out.out.strip().splitlines())
     cells = json.loads(results.read_text())["cells"]
     assert sorted(c["train"]["pos_weight"] == 1.0 for c in cells) == [False] * 9 + [True] * 3
+    # models of separate runs drawn side by side from the cache, nothing trained
+    fig2 = runpy.run_path(str(BENCH.with_name("field_models_figure.py")), run_name="fmf")
+    out2 = tmp_path / "side.png"
+    assert fig2["main"]([f"dem={results}:dem", f"kin={results}:kin", "--seed", "1",
+                         "--field", f"s={root / 'sec.npy'}:{root / 'mask.npy'}",
+                         "--f3", str(root / "f3.sgy"), "--cache", str(cache),
+                         "--out", str(out2)]) == 0
+    drawn = json.loads(capsys.readouterr().out)
+    assert out2.stat().st_size > 0 and set(drawn["models"]) == {"dem", "kin"}
+    assert all(Path(p).parent == cache / "models" for p in drawn["models"].values())
+    with pytest.raises(InputError, match="name one as RESULTS:MODEL"):
+        fig2["main"]([f"x={results}", "--f3", str(root / "f3.sgy"), "--cache", str(cache),
+                      "--out", str(out2)])
+    with pytest.raises(InputError, match="trained 2 ways"):  # seed 0: with and without 1
+        fig2["main"]([f"x={results}:dem", "--seed", "0", "--f3", str(root / "f3.sgy"),
+                      "--cache", str(cache), "--out", str(out2)])
+    with pytest.raises(InputError, match="are not in --cache"):
+        fig2["main"]([f"x={results}:dem", "--seed", "1", "--f3", str(root / "f3.sgy"),
+                      "--cache", str(tmp_path), "--out", str(out2)])
 
 
 def test_input_errors(bench, common, field, tmp_path):
