@@ -12,7 +12,8 @@ light.
 
 The model: a 3-level U-Net (``base``, 2 ``base``, 4 ``base`` channels; ~120k parameters at
 ``base = 16``), each section standardised on the fly; loss = binary cross-entropy (positive
-weight = background / fault pixel ratio of the first batches, capped at 50) + soft Dice; Adam.
+weight = background / fault pixel ratio of the first batches, capped at 50, or a given
+``pos_weight``) + soft Dice; Adam.
 Everything is seeded; on CPU results repeat for a fixed thread count.
 """
 
@@ -123,7 +124,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     pos_weight : the weight of fault pixels in the binary cross-entropy. None: the background /
         fault pixel ratio of the first 8 batches (kept pixels only), capped at 50, which makes
         the probabilities of faint faults high (a model is then read at a threshold well above
-        0.5). 1: unweighted, the loss whose probabilities estimate the chance of a label.
+        0.5). 1: unweighted (the cross-entropy alone would then estimate the chance of a
+        label; docs/benchmarks.md, "The loss weight of fault pixels").
     augment : random left-right flips, polarity flips and amplitude scaling (x 0.5 .. 2) of
         each training crop.
     amp : CUDA mixed precision (autocast + gradient scaling); None = on when on CUDA.
