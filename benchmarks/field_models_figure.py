@@ -29,8 +29,11 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("model", nargs="+", metavar="NAME=RESULTS[:MODEL]")
     ap.add_argument("--seed", type=int, default=0, help="the seed drawn (default 0)")
-    ap.add_argument("--field", action="append", default=[], metavar="NAME=SECTION:MASK",
-                    help="a field section and its mask (repeatable), drawn at scale 1")
+    ap.add_argument("--field-dir", action="append", metavar="DIR",
+                    help="a field set's folder, as the field benchmark reads it (repeatable)")
+    ap.add_argument("--field", action="append", metavar="[NAME=]SECTION:MASK",
+                    help="a field section and its mask, as the field benchmark reads them "
+                         "(repeatable); every section is drawn at scale 1")
     ap.add_argument("--f3", metavar="PATH", help="an unlabelled section drawn last")
     ap.add_argument("--cache", default=str(Path.home() / ".cache" / "demseis-bench" / "field"),
                     help="the field benchmark's --cache")
@@ -80,17 +83,13 @@ def main(argv: list[str] | None = None) -> int:
     cache = Path(args.cache).expanduser()
     found = [find_model(s, args.seed, cache) for s in args.model]
     data: dict = {}
-    sections: list[tuple[str, np.ndarray, np.ndarray | None]] = []
-    for spec in args.field:
-        name, sep, rest = spec.partition("=")
-        section, colon, mask = rest.rpartition(":")
-        if not (sep and colon and name):
-            raise InputError(f"--field {spec!r}: expected NAME=SECTION:MASK")
-        sections.append((name, *fb["cache_pair"](data, section, mask, True)))
+    sections: list[tuple[str, np.ndarray, np.ndarray | None]] = [
+        (f"{set_name}/{key}", *fb["cache_pair"](data, section, mask, True))
+        for set_name, pairs in fb["field_sets"](args).items() for key, section, mask in pairs]
     if args.f3:
         sections.append(("F3", fb["cache_f3"](data, args.f3), None))
     if not sections:
-        raise InputError("nothing to draw: give --field or --f3")
+        raise InputError("nothing to draw: give --field-dir, --field or --f3")
     panels = {}
     for name, saved, base in found:
         net = build_unet(base)
