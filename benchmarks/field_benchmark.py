@@ -423,6 +423,15 @@ def learning_curve_sets(tsets: dict, train_runs: list[int]) -> tuple[dict, dict[
     return out, limits
 
 
+def pos_weights(text: str) -> float | list[float]:
+    """``--pos-weight``: ``15`` (one weight) or ``40,5`` (one per store)."""
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: numbers separated by commas") from None
+    return values[0] if len(values) == 1 else values
+
+
 def first_train_runs(store: str, fr: tuple[float, float, float], n: int) -> list[int]:
     """The first ``n`` train runs of ``store`` (in run order) under the split ``fr``."""
     from demseis.datasets import FaultSegDataset
@@ -597,9 +606,10 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                     help="train with the pixels of this label array (with these values; "
                          "default any non-zero) left out of the loss, in the stores that hold "
                          "it (fault_uncertain: train_unet(ignore=))")
-    ap.add_argument("--pos-weight", type=float, metavar="W",
+    ap.add_argument("--pos-weight", type=pos_weights, metavar="W[,W...]",
                     help="the fault pixels' weight in the cross-entropy (train_unet(pos_weight=)"
-                         "; default: the background / fault ratio, capped at 50)")
+                         "; default: the background / fault ratio, capped at 50); several: "
+                         "one per store of each training set, in the stores' order")
     args = ap.parse_args(argv)
     from demseis.errors import InputError
     from demseis.learning.train import parse_ignore
@@ -621,6 +631,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     import torch
 
+    from demseis.errors import InputError
     from demseis.learning.train import build_unet, train_unet
 
     cuda, device, steps, base = budget(args, 600)
@@ -634,6 +645,10 @@ def main(argv: list[str] | None = None) -> int:
     limits: dict[str, int] = {}  # training set -> the train runs it uses (--train-runs)
     if args.train_runs:
         tsets, limits = learning_curve_sets(tsets, args.train_runs)
+    for name, (stores, _) in tsets.items():
+        if isinstance(args.pos_weight, list) and len(args.pos_weight) != len(stores):
+            raise InputError(f"--pos-weight: {len(args.pos_weight)} weights for training set "
+                             f"{name!r} of {len(stores)} store(s); give one, or one per store")
 
     # what every model is scored on: item key -> item; a key names its inputs
     items: dict[str, dict] = {}

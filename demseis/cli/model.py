@@ -36,10 +36,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--select", choices=("ods_f1", "f1"), default="ods_f1",
                    help="the validation score that picks the model kept: F1 at the model's best "
                    "threshold, which is saved with it (ods_f1, the default), or F1 at 0.5 (f1)")
-    t.add_argument("--pos-weight", type=float, default=None, metavar="W",
+    t.add_argument("--pos-weight", default=None, metavar="W[,W...]",
                    help="the weight of fault pixels in the cross-entropy (default: the "
                    "background / fault pixel ratio of the first batches, at most 50; 1: "
-                   "unweighted, lower probabilities; docs/model.md)")
+                   "unweighted, lower probabilities; docs/model.md); or one per store, "
+                   "comma-separated")
     t.add_argument("--out", default="model.pt", help="model file (default model.pt)")
     t.add_argument("--steps", type=pos_int, default=300,
                    help="optimiser steps in all, counting those before a --resume (default 300)")

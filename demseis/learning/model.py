@@ -52,7 +52,8 @@ from demseis.evaluation.segyfile import (cube_geometry, is_segy, open_cube, read
                                          read_inline, read_segy_section, write_segy_cube_like,
                                          write_segy_like)
 from demseis.evaluation.store_scoring import score_store
-from demseis.learning.train import build_unet, check_weights, predict_sections, train_unet
+from demseis.learning.train import (build_unet, check_pos_weight, check_weights, predict_sections,
+                                    train_unet)
 
 #: the model file's format tag and version
 FORMAT = "demseis-unet"
@@ -110,6 +111,18 @@ def check_trainable(store: str | Path, crop: int | None) -> int:
     return int(crop)
 
 
+def _pos_weight(pos_weight: float | Sequence[float], n_stores: int) -> float | list[float]:
+    """``--pos-weight`` checked: one number > 0 (a float), or one per store (a list of
+    floats); InputError naming ``--pos-weight`` otherwise."""
+    try:
+        check_pos_weight(pos_weight, n_stores)
+    except InputError:
+        shown = pos_weight if np.ndim(pos_weight) == 0 else ",".join(map(str, pos_weight))
+        raise InputError(f"--pos-weight {shown}: use a number > 0, or one per store "
+                         f"({n_stores} here), comma-separated") from None
+    return float(pos_weight) if np.ndim(pos_weight) == 0 else [float(w) for w in pos_weight]
+
+
 def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, steps: int = 300,
                 crop: int | None = None, batch: int = 8, base: int = 16, lr: float = 2e-3,
                 seed: int = 0, device: str | None = None, val_every: int | None = None,
@@ -117,7 +130,8 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
                 progress: bool = True, log: Callable[[str], None] | None = print,
                 weights: Sequence[float] | None = None, ignore: str | None = None,
                 ignore_values: Sequence[int] | None = None,
-                select: str = "ods_f1", pos_weight: float | None = None) -> dict[str, Any]:
+                select: str = "ods_f1",
+                pos_weight: float | Sequence[float] | None = None) -> dict[str, Any]:
     """Train the U-Net on ``store`` (or several stores) and write it to ``out``; return the
     held-out metrics.
 
@@ -152,7 +166,7 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
         models were picked before they carried a threshold).
     pos_weight : the weight of fault pixels in the training loss (None: the background /
         fault ratio of the first batches, at most 50;
-        :func:`demseis.learning.train.train_unet`).
+        :func:`demseis.learning.train.train_unet`), or one weight per store.
 
     Returns
     -------
@@ -174,11 +188,11 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
             raise InputError(f"--{name} {value}: use at least 1")
     if val_every is not None and val_every < 1:
         raise InputError(f"--val-every {val_every}: use at least 1")
-    if pos_weight is not None and not (np.isfinite(pos_weight) and pos_weight > 0):
-        raise InputError(f"--pos-weight {pos_weight}: use a number > 0")
     stores = [str(s) for s in store] if isinstance(store, (list, tuple)) else [str(store)]
     if not stores:
         raise InputError("no store to train on")
+    if pos_weight is not None:
+        pos_weight = _pos_weight(pos_weight, len(stores))
     shares = check_weights(weights, len(stores))
     weights = [1.0] * len(stores) if weights is None else [float(w) for w in weights]
     resolved = [str(Path(s).resolve()) for s in stores]
@@ -201,7 +215,7 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
                               else [int(v) for v in ignore_values]]
     settings["select"] = select
     if pos_weight is not None:  # likewise
-        settings["pos_weight"] = float(pos_weight)
+        settings["pos_weight"] = pos_weight
     state = None
     if resume:
         if not ckpt.is_file():
@@ -259,7 +273,7 @@ def train_model(store: str | Path | Sequence[str | Path], out: str | Path, *, st
                "device": info["device"],
                "steps": int(info["steps"]), "best_val_f1": info.get("best_val_f1"),
                "best_step": info.get("best_step"), **settings,
-               "pos_weight": float(info["pos_weight"]), "per_store": per_store,
+               "pos_weight": info["pos_weight"], "per_store": per_store,
                "chosen_threshold": chosen,
                "at_chosen_threshold": _at_threshold(held, chosen["threshold"])}
     metrics["warnings"] = training_warnings(metrics)

@@ -105,7 +105,7 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
                save: Callable[[dict[str, Any]], None] | None = None,
                weights: Sequence[float] | None = None, ignore: str | None = None,
                ignore_values: Sequence[int] | None = None,
-               select: str = "f1", pos_weight: float | None = None
+               select: str = "f1", pos_weight: float | Sequence[float] | None = None
                ) -> tuple[Any, dict[str, Any]]:
     """Train :func:`build_unet` on random crops of a store's ``split``.
 
@@ -125,7 +125,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         fault pixel ratio of the first 8 batches (kept pixels only), capped at 50, which makes
         the probabilities of faint faults high (a model is then read at a threshold well above
         0.5). 1: unweighted (the cross-entropy alone would then estimate the chance of a
-        label; docs/benchmarks.md, "The loss weight of fault pixels").
+        label; docs/benchmarks.md, "The loss weight of fault pixels"). A list of one weight
+        per store (a mix): each sample's fault pixels are weighted by its store's weight.
     augment : random left-right flips, polarity flips and amplitude scaling (x 0.5 .. 2) of
         each training crop.
     amp : CUDA mixed precision (autocast + gradient scaling); None = on when on CUDA.
@@ -167,9 +168,10 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     data = torch.utils.data
     if select not in SELECT:
         raise InputError(f"select {select!r}: expected one of {', '.join(SELECT)}")
-    if pos_weight is not None and not (np.isfinite(pos_weight) and pos_weight > 0):
-        raise InputError(f"pos_weight = {pos_weight}; allowed: a number > 0 (or None: the "
-                         "background / fault ratio)")
+    stores = list(store) if isinstance(store, (list, tuple)) else [store]
+    per_store = check_pos_weight(pos_weight, len(stores))
+    if per_store and len(stores) == 1:  # one store: its weight is the weight
+        pos_weight, per_store = float(pos_weight[0]), False
 
     if (steps is None) == (minutes is None):
         raise InputError("train_unet: give exactly one of steps or minutes")
@@ -179,7 +181,6 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     if threads:
         torch.set_num_threads(int(threads))
     dev = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
-    stores = list(store) if isinstance(store, (list, tuple)) else [store]
     shares = check_weights(weights, len(stores))
     read = dict(inputs=("seismic",), split=split, crop=(crop, crop), seed=seed, where=where,
                 split_fractions=split_fractions)
@@ -202,29 +203,34 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         ds = _Mixed(parts, data.ConcatDataset(parts))
         sizes = [len(p) for p in parts]
         draws = _StoreDraws(mix_sampler(sizes, shares, gen), sizes)
-        loader = data.DataLoader(ds.concat, batch_size=batch, sampler=draws, drop_last=False)
+        # each item tagged with its store, for a weight of fault pixels per store
+        loader = data.DataLoader(_Tagged(ds.concat, sizes), batch_size=batch, sampler=draws,
+                                 drop_last=False)
     use_amp = (dev.type == "cuda") if amp is None else bool(amp and dev.type == "cuda")
     scaler = torch.amp.GradScaler("cuda", enabled=use_amp)
     if resume is None:
         # fault pixels are rare: weight them by the background / fault ratio of a few batches
         if ignore is None:
-            frac = np.mean([float((y > 0).float().mean()) for _, (_, y) in zip(range(8), loader)])
+            frac = np.mean([float((b[1] > 0).float().mean()) for _, b in zip(range(8), loader)])
         else:
-            first = [_split_ignore(y, target, ignore, ignore_values) for _, (_, y) in
+            first = [_split_ignore(b[1], target, ignore, ignore_values) for _, b in
                      zip(range(8), loader)]
             kept = sum(float(k.sum()) for _, k in first)
             frac = sum(float(((y > 0) & k).sum()) for y, k in first) / max(kept, 1.0)
             ignored_fraction = 1.0 - kept / max(sum(k.numel() for _, k in first), 1)
         ratio = min((1 - frac) / max(frac, 1e-6), 50.0) if pos_weight is None else pos_weight
-        pos_weight = torch.tensor(float(ratio), device=dev)
         draws.counts[:] = 0  # those batches were looked at, not trained on
     else:
         frac = float(resume["fault_fraction"])
-        pos_weight = torch.tensor(float(resume["pos_weight"]), device=dev)
+        ratio = resume["pos_weight"]
+        per_store = np.ndim(ratio) > 0
         ignored_fraction = float("nan")
+    # one weight (a scalar tensor) or one per store (indexed by each sample's store)
+    pos_weight = torch.tensor([float(w) for w in ratio] if per_store else float(ratio),
+                              dtype=torch.float32, device=dev)
+    recorded = pos_weight.tolist()  # float or list of floats, as the loss uses them
     model = build_unet(base).to(dev)
     opt = torch.optim.Adam(model.parameters(), lr=lr)
-    bce = torch.nn.BCEWithLogitsLoss(pos_weight=pos_weight)
     t0, step, epoch, losses = time.perf_counter(), 0, 0, []
     budget = None if minutes is None else 60.0 * float(minutes)
 
@@ -240,7 +246,7 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         gen.manual_seed(seed + step)  # a different crop order than the one already trained on
 
     def state() -> dict[str, Any]:
-        return training_state(model, opt, step=step, epoch=epoch, pos_weight=float(pos_weight),
+        return training_state(model, opt, step=step, epoch=epoch, pos_weight=recorded,
                               fault_fraction=float(frac), best=best, drawn=draws.counts)
 
     bar = None
@@ -282,13 +288,14 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
                 f"({len(np.unique(part.run_ids))} runs), share {share:.3f} of the batches")
     if log:
         log(f"train: {len(ds)} samples ({len(np.unique(ds.run_ids))} runs), crop {crop}, "
-            f"fault fraction {frac:.4f}, pos_weight {float(pos_weight):.1f}, device {dev}, "
+            f"fault fraction {frac:.4f}, pos_weight {_show(recorded)}, device {dev}, "
             + (f"{steps} steps" if steps is not None else f"budget {minutes:g} min"))
     while not done():
         ds.set_epoch(epoch)
         model.train()
-        for x, y in loader:
-            x = x.to(dev)
+        for item in loader:
+            x, y = item[0].to(dev), item[1]
+            pw = pos_weight[item[2].to(dev)].view(-1, 1, 1, 1) if per_store else pos_weight
             if ignore is None:
                 y = (y > 0).float()[:, None].to(dev)
                 if augment:
@@ -306,9 +313,10 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
             if ignore is None:
                 p = torch.sigmoid(logits)
                 dice = 1 - (2 * (p * y).sum() + 1) / (p.sum() + y.sum() + 1)
-                loss = bce(logits, y) + dice
+                loss = torch.nn.functional.binary_cross_entropy_with_logits(
+                    logits, y, pos_weight=pw) + dice
             else:
-                loss = masked_loss(logits, y, keep, pos_weight)
+                loss = masked_loss(logits, y, keep, pw)
             opt.zero_grad()
             scaler.scale(loss).backward()
             scaler.step(opt)
@@ -337,7 +345,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
         model.load_state_dict(best["state"])
     info = {"steps": step, "epochs": epoch, "seconds": round(time.perf_counter() - t0, 1),
             "final_loss": float(np.mean(losses[-50:])) if losses else float("nan"),
-            "pos_weight": round(float(pos_weight), 2), "n_samples": len(ds),
+            "pos_weight": ([round(w, 2) for w in recorded] if per_store
+                           else round(recorded, 2)), "n_samples": len(ds),
             "n_runs": int(len(np.unique(ds.run_ids))), "device": str(dev), "amp": use_amp,
             "augment": bool(augment), "drawn_per_store": [int(c) for c in draws.counts]}
     if ignore is not None:
@@ -352,7 +361,8 @@ def train_unet(store: Any, *, steps: int | None = None, minutes: float | None = 
     return model, info
 
 
-def training_state(model: Any, opt: Any, *, step: int, epoch: int, pos_weight: float,
+def training_state(model: Any, opt: Any, *, step: int, epoch: int,
+                   pos_weight: float | Sequence[float],
                    fault_fraction: float, best: Mapping[str, Any],
                    drawn: Sequence[int] = ()) -> dict[str, Any]:
     """What :func:`train_unet` needs to ``resume``: weights, optimiser, step, epoch, the loss's
@@ -363,9 +373,40 @@ def training_state(model: Any, opt: Any, *, step: int, epoch: int, pos_weight: f
     if best.get("per_store") is not None:
         kept["per_store"] = [None if x is None else float(x) for x in best["per_store"]]
     return {"model": model.state_dict(), "optimizer": opt.state_dict(), "step": int(step),
-            "epoch": int(epoch), "pos_weight": float(pos_weight),
+            "epoch": int(epoch),
+            "pos_weight": (float(pos_weight) if np.ndim(pos_weight) == 0
+                           else [float(w) for w in pos_weight]),
             "fault_fraction": float(fault_fraction), "best": kept,
             "drawn": [int(c) for c in drawn]}
+
+
+def check_pos_weight(pos_weight: float | Sequence[float] | None, n_stores: int) -> bool:
+    """Whether ``pos_weight`` is one weight per store (True) or one for all (False; None too).
+
+    InputError, one line, when a weight is not a finite number greater than 0, or a list's
+    length is not ``n_stores`` (a list of one is one weight per store of a single store).
+    """
+    if pos_weight is None:
+        return False
+    values = [pos_weight] if np.ndim(pos_weight) == 0 else list(pos_weight)
+    for x in values:
+        ok = isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
+        if not ok or not np.isfinite(x) or x <= 0:
+            raise InputError(f"pos_weight = {x!r}; allowed: a number > 0 (or None: the "
+                             "background / fault ratio)")
+    if np.ndim(pos_weight) == 0:
+        return False
+    if len(values) != n_stores:
+        raise InputError(f"pos_weight: {len(values)} weight(s) for {n_stores} store(s); give "
+                         "one, or one per store in the stores' order")
+    return True
+
+
+def _show(weight: float | Sequence[float]) -> str:
+    """A loss weight for the log: ``45.3`` or ``[40.0, 5.0]``."""
+    if np.ndim(weight) == 0:
+        return f"{float(weight):.1f}"
+    return "[" + ", ".join(f"{float(w):.1f}" for w in weight) + "]"
 
 
 def check_weights(weights: Sequence[float] | None, n_stores: int) -> list[float]:
@@ -436,6 +477,21 @@ def _validation_set(stores: list, target: str, split_fractions: tuple[float, flo
     return xs, ys
 
 
+class _Tagged:
+    """A concatenation's items ``(x, y)`` as ``(x, y, s)``: s the index of the store each
+    item comes from (``sizes``: the stores' lengths, in order)."""
+
+    def __init__(self, concat: Any, sizes: Sequence[int]) -> None:
+        self.concat, self.ends = concat, np.cumsum(sizes)
+
+    def __len__(self) -> int:
+        return len(self.concat)
+
+    def __getitem__(self, i: int) -> tuple[Any, Any, int]:
+        x, y = self.concat[i]
+        return x, y, int(np.searchsorted(self.ends, int(i), side="right"))
+
+
 class _Mixed:
     """Several FaultSegDatasets trained on together (``len``, ``run_ids``, ``set_epoch``)."""
 
@@ -484,7 +540,8 @@ def masked_loss(logits: Any, y: Any, keep: Any, pos_weight: Any) -> Any:
     Parameters
     ----------
     logits, y, keep : tensors of one shape; ``y`` and ``keep`` 0 or 1 (float).
-    pos_weight : the positive class's weight (a scalar tensor).
+    pos_weight : the positive class's weight: a scalar tensor, or one per sample of shape
+        (B, 1, 1, 1).
     """
     torch = import_torch("training")
     p = torch.sigmoid(logits) * keep

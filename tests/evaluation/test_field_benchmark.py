@@ -179,6 +179,17 @@ def test_whole_benchmark_on_tiny_stores(bench, field, tiny_store, tmp_path, caps
     assert all(json.loads(x)["pos_weight"] == 1.0 for x in out.out.strip().splitlines())
     cells = json.loads(results.read_text())["cells"]
     assert sorted(c["train"]["pos_weight"] == 1.0 for c in cells) == [False] * 9 + [True] * 3
+    # one weight per store of a mix: trained anew, the weights recorded in their order
+    mix_argv = [a for a in argv[:-2] if a not in argv[:6]] + [
+        "--mix", f"m={tiny_store}:1,{mix[1]}:2", "--pos-weight", "5,1"]
+    assert bench["main"](mix_argv) == 0
+    out = capsys.readouterr()
+    assert out.err.count("training ") == 1
+    assert json.loads(out.out)["pos_weight"] == [5.0, 1.0]
+    cells = json.loads(results.read_text())["cells"]
+    assert [c["train"]["pos_weight"] for c in cells if c["model"] == "m"] == [[5.0, 1.0]]
+    with pytest.raises(InputError, match="2 weights for training set 'dem' of 1 store"):
+        bench["main"](argv[:-2] + ["--pos-weight", "5,1"])
     # models of separate runs drawn side by side from the cache, nothing trained
     fig2 = runpy.run_path(str(BENCH.with_name("field_models_figure.py")), run_name="fmf")
     out2 = tmp_path / "side.png"

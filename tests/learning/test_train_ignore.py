@@ -49,11 +49,14 @@ def _store_with_uncertain(path, labels=None, n_shards=4, per_shard=4, h=24, w=24
 
 
 def _slow_loss(logits, y, keep, pos_weight):
-    """The masked loss written out pixel by pixel in NumPy."""
+    """The masked loss written out pixel by pixel in NumPy (``pos_weight``: one number, or one
+    per sample)."""
     z, t, k = (np.asarray(a, np.float64).ravel() for a in (logits, y, keep))
+    w = np.repeat(np.broadcast_to(np.asarray(pos_weight, np.float64), (len(logits),)),
+                  z.size // len(logits))
     p = 1 / (1 + np.exp(-z))
-    bce = [-(pos_weight * ti * np.log(pi) + (1 - ti) * np.log(1 - pi))
-           for zi, ti, pi, ki in zip(z, t, p, k) if ki]
+    bce = [-(wi * ti * np.log(pi) + (1 - ti) * np.log(1 - pi))
+           for wi, ti, pi, ki in zip(w, t, p, k) if ki]
     inter = sum(pi * ti for pi, ti, ki in zip(p, t, k) if ki)
     dice = 1 - (2 * inter + 1) / (sum(p * k) + sum(t * k) + 1)
     return np.mean(bce) + dice
@@ -79,6 +82,10 @@ def test_masked_loss_against_a_slow_reference_and_the_plain_loss():
     assert (z.grad[keep == 0] == 0).all() and (z.grad[keep == 1] != 0).all()
     y2 = torch.where(keep == 0, 1 - y, y)
     assert float(masked_loss(logits, y2, keep, pw)) == pytest.approx(got, rel=1e-6)
+    # one weight per sample (a weight per store): each sample's fault pixels by its own
+    each = torch.tensor([7.5, 2.0]).view(-1, 1, 1, 1)
+    assert float(masked_loss(logits, y, keep, each)) == pytest.approx(
+        _slow_loss(logits, y, keep, [7.5, 2.0]), rel=1e-5)
 
 
 def test_labels_under_ignored_pixels_change_nothing(tmp_path):
@@ -120,6 +127,24 @@ def test_a_mix_with_a_store_without_the_array_and_the_errors(tmp_path):
     for bad in ("=1", "fault_uncertain=", "fault_uncertain=x"):
         with pytest.raises(InputError, match="--ignore"):
             parse_ignore(bad)
+
+
+def test_a_weight_of_fault_pixels_per_store_with_pixels_left_out(tmp_path):
+    """With ``ignore``, a weight per store still weighs each sample by its own store: a store
+    without fault pixels trains the same whatever its weight, the other store's weight
+    matters."""
+    a, empty = tmp_path / "a.zarr", tmp_path / "empty.zarr"
+    _store_with_uncertain(a)
+    toy_store(empty, h=24, w=24, fault_fn=np.zeros_like)
+
+    def params(pos_weight):
+        m, _ = train_unet([a, empty], ignore="fault_uncertain", pos_weight=pos_weight, **KW)
+        return np.concatenate([p.detach().numpy().ravel() for p in m.parameters()])
+
+    one = params(7.0)
+    np.testing.assert_array_equal(params([7.0, 7.0]), one)
+    np.testing.assert_array_equal(params([7.0, 40.0]), one)
+    assert np.abs(params([1.0, 7.0]) - one).max() > 1e-4
 
 
 def test_cli_train_ignore_is_recorded_and_resume_checks_it(tmp_path, capsys):

@@ -104,6 +104,26 @@ def test_cli_trains_on_two_stores_and_resumes(two_stores, tmp_path, capsys):
     assert "other stores, weights" in capsys.readouterr().err
 
 
+def test_cli_weight_of_fault_pixels_per_store(two_stores, tmp_path, capsys):
+    """``--pos-weight 5,1``: one weight per store, recorded in the model's JSON; the resume
+    keeps it; a count or value that does not fit is one line naming --pos-weight."""
+    a, b = two_stores
+    model = tmp_path / "pw.pt"
+    args = ["train", str(a), str(b), "--out", str(model), "--save-every", "2", *FAST]
+    assert main([*args, "--steps", "2", "--pos-weight", "5,1"]) == 0
+    assert json.loads(model.with_suffix(".json").read_text())["pos_weight"] == [5.0, 1.0]
+    assert main([*args, "--steps", "4", "--resume", "--pos-weight", "5,2"]) == 2
+    assert "--pos-weight" in capsys.readouterr().err
+    assert main([*args, "--steps", "4", "--resume", "--pos-weight", "5,1"]) == 0
+    capsys.readouterr()
+    for bad, message in (("5,1,2", "--pos-weight 5.0,1.0,2.0: use a number > 0, or one per "
+                          "store (2 here)"), ("5,0", "--pos-weight 5.0,0.0"),
+                         ("5,x", "--pos-weight '5,x'")):
+        assert main([*args, "--steps", "2", "--pos-weight", bad]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and message in err, err
+
+
 def test_single_store_metadata_keeps_its_store_key(two_stores, tmp_path):
     a, _ = two_stores
     meta = demseis.train(a, out=tmp_path / "one.pt", steps=1, base=4, batch=4, device="cpu",
@@ -132,3 +152,37 @@ def test_bad_weights_and_stores_are_one_line(two_stores, tmp_path, capsys):
     with pytest.raises(InputError, match="weight 1"):
         demseis.train([a, b], out=tmp_path / "m.pt", weights=[0, 1])
     assert not (tmp_path / "m.pt").exists()
+
+
+def test_a_weight_of_fault_pixels_per_store(tmp_path):
+    """pos_weight=[wa, wb] weighs each sample's fault pixels by its own store's weight: equal
+    weights train what one weight trains, and the weight of a store without fault pixels
+    changes nothing, while the other store's weight does."""
+    a, empty = tmp_path / "a.zarr", tmp_path / "empty.zarr"
+    toy_store(a)
+    toy_store(empty, n_shards=4, fault_fn=np.zeros_like)
+    kw = dict(steps=4, crop=16, batch=4, base=4, threads=1, device="cpu", log=None)
+
+    def params(stores, pos_weight):
+        m, info = train_unet(stores, pos_weight=pos_weight, **kw)
+        return np.concatenate([p.detach().numpy().ravel() for p in m.parameters()]), info
+
+    one, _ = params([a, empty], 7.0)
+    both, info = params([a, empty], [7.0, 7.0])
+    np.testing.assert_array_equal(one, both)
+    assert info["pos_weight"] == [7.0, 7.0]
+    # the empty store's samples have no fault pixel for its weight to weigh
+    low, _ = params([a, empty], [7.0, 1.0])
+    high, _ = params([a, empty], [7.0, 40.0])
+    np.testing.assert_array_equal(low, both)
+    np.testing.assert_array_equal(high, both)
+    other, _ = params([a, empty], [1.0, 7.0])
+    assert np.abs(other - both).max() > 1e-4
+    # one store: a list of one is its weight
+    single, _ = params(a, [7.0])
+    np.testing.assert_array_equal(single, params(a, 7.0)[0])
+    for bad, message in (([7.0], "1 weight"), ([7.0, 1.0, 2.0], "3 weight"), ([7.0, 0.0], "0.0"),
+                         ([float("nan"), 1.0], "nan")):
+        with pytest.raises(InputError, match=message) as err:
+            train_unet([a, empty], pos_weight=bad, **kw)
+        assert "\n" not in str(err.value)

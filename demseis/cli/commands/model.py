@@ -25,6 +25,19 @@ def _weights(text: str | None) -> list[float] | None:
                          "e.g. 2,1") from None
 
 
+def _pos_weight(text: str | None) -> float | list[float] | None:
+    """``--pos-weight 15`` as a number, ``--pos-weight 20,10`` as one per store; their count
+    and sign are checked with the stores."""
+    if text is None:
+        return None
+    try:
+        values = [float(w) for w in text.split(",")]
+    except ValueError:
+        raise InputError(f"--pos-weight {text!r}: give a number, or one per store "
+                         "comma-separated, e.g. 20,10") from None
+    return values[0] if len(values) == 1 else values
+
+
 def cmd_train(args: argparse.Namespace) -> int:
     quiet = args.quiet
     ignore, ignore_values = parse_ignore(args.ignore)
@@ -34,7 +47,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                     save_every=args.save_every, resume=args.resume, threads=args.threads,
                     progress=not quiet and sys.stderr.isatty(), log=None if quiet else print,
                     ignore=ignore, ignore_values=ignore_values, select=args.select,
-                    pos_weight=args.pos_weight)
+                    pos_weight=_pos_weight(args.pos_weight))
     for text in metrics.get("warnings", []):
         print(f"demseis: warning: {text}", file=sys.stderr)
     return 0
