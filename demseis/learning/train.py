@@ -390,8 +390,7 @@ def check_pos_weight(pos_weight: float | Sequence[float] | None, n_stores: int) 
         return False
     values = [pos_weight] if np.ndim(pos_weight) == 0 else list(pos_weight)
     for x in values:
-        ok = isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
-        if not ok or not np.isfinite(x) or x <= 0:
+        if not _positive(x):
             raise InputError(f"pos_weight = {x!r}; allowed: a number > 0 (or None: the "
                              "background / fault ratio)")
     if np.ndim(pos_weight) == 0:
@@ -400,6 +399,17 @@ def check_pos_weight(pos_weight: float | Sequence[float] | None, n_stores: int) 
         raise InputError(f"pos_weight: {len(values)} weight(s) for {n_stores} store(s); give "
                          "one, or one per store in the stores' order")
     return True
+
+
+def _positive(x: Any) -> bool:
+    """A finite number greater than 0 (a bool is not a number here)."""
+    ok = isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
+    return ok and bool(np.isfinite(x)) and x > 0
+
+
+def _store_of(ends: np.ndarray, i: int) -> int:
+    """The store of item ``i`` of a concatenation whose stores end at ``ends`` (cumsum)."""
+    return int(np.searchsorted(ends, int(i), side="right"))
 
 
 def _show(weight: float | Sequence[float]) -> str:
@@ -422,8 +432,7 @@ def check_weights(weights: Sequence[float] | None, n_stores: int) -> list[float]
         raise InputError(f"--weights: {len(w)} weight(s) for {n_stores} store(s); give one per "
                          "store, in the stores' order")
     for i, x in enumerate(w):
-        ok = isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
-        if not ok or not np.isfinite(x) or x <= 0:
+        if not _positive(x):
             raise InputError(f"--weights: weight {i + 1} is {x!r}; each must be a finite number "
                              "greater than 0")
     total = float(sum(float(x) for x in w))
@@ -456,7 +465,7 @@ class _StoreDraws:
 
     def __iter__(self) -> Any:
         for i in self.sampler:
-            self.counts[int(np.searchsorted(self.ends, int(i), side="right"))] += 1
+            self.counts[_store_of(self.ends, i)] += 1
             yield i
 
 
@@ -489,7 +498,7 @@ class _Tagged:
 
     def __getitem__(self, i: int) -> tuple[Any, Any, int]:
         x, y = self.concat[i]
-        return x, y, int(np.searchsorted(self.ends, int(i), side="right"))
+        return x, y, _store_of(self.ends, i)
 
 
 class _Mixed:

@@ -14,15 +14,19 @@ from demseis.learning.train import parse_ignore
 from demseis.plotting import plot_section
 
 
+def _numbers(flag: str, text: str, hint: str) -> list[float]:
+    """The comma-separated numbers of option ``flag``; InputError ``flag 'text': hint``."""
+    try:
+        return [float(w) for w in text.split(",")]
+    except ValueError:
+        raise InputError(f"{flag} {text!r}: {hint}") from None
+
+
 def _weights(text: str | None) -> list[float] | None:
     """``--weights 2,1`` as numbers; their count and sign are checked with the stores."""
     if text is None:
         return None
-    try:
-        return [float(w) for w in text.split(",")]
-    except ValueError:
-        raise InputError(f"--weights {text!r}: give one number per store, comma-separated, "
-                         "e.g. 2,1") from None
+    return _numbers("--weights", text, "give one number per store, comma-separated, e.g. 2,1")
 
 
 def _pos_weight(text: str | None) -> float | list[float] | None:
@@ -30,11 +34,8 @@ def _pos_weight(text: str | None) -> float | list[float] | None:
     and sign are checked with the stores."""
     if text is None:
         return None
-    try:
-        values = [float(w) for w in text.split(",")]
-    except ValueError:
-        raise InputError(f"--pos-weight {text!r}: give a number, or one per store "
-                         "comma-separated, e.g. 20,10") from None
+    values = _numbers("--pos-weight", text,
+                      "give a number, or one per store comma-separated, e.g. 20,10")
     return values[0] if len(values) == 1 else values
 
 
