@@ -33,21 +33,32 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--like", action="append", metavar="SECTION",
                    help="fit the config to this survey section first (demseis fit; repeatable; "
                         "on --preset, default field) instead of reading a CONFIG")
-    p.add_argument("--dt-ms", type=float, default=None, metavar="MS",
-                   help="with --like: the sample interval where the headers do not give it")
-    p.add_argument("--trace-spacing-m", type=float, default=None, metavar="M",
-                   help="with --like: the trace spacing where the headers do not give it")
-    p.add_argument("--spread", choices=("fit", "preset"), default=None,
-                   help="with --like: ranges around the fitted centre (as demseis fit --spread; "
-                        "default fit)")
+    _add_like_options(p)
     p.set_defaults(func="generate:cmd_generate")
 
-    p = sub.add_parser("render", help="re-render a store's particle snapshots at new frequencies / SNRs")
+    p = sub.add_parser(
+        "render", help="re-render a store's particle snapshots: new frequencies / SNRs, or "
+        "another survey's look",
+        description="Write a new store with every run of STORE drawn again from its particle "
+        "snapshots, without the DEM: at a grid of frequencies and SNRs (--freq, --snr), with "
+        "the rendering keys of a config (--config: [output], [labels] and the sample-level "
+        "[sweep] keys), or with the look of a survey's sections (--like: demseis fit's sampling, "
+        "wavelet, noise and processing). A run's samples equal those demseis generate writes "
+        "with the same config.")
     p.add_argument("store", metavar="STORE", help="source store (its DEM snapshots are reused)")
-    p.add_argument("--freq", required=True, help="comma-separated Ricker frequencies in Hz, e.g. 20,40,60")
-    p.add_argument("--snr", default="inf", help="comma-separated SNRs in dB (inf = no noise), default inf")
-    p.add_argument("--noise", default="white", choices=("white", "band", "coloured"),
-                   help="noise kind (coloured: power spectrum f^-1)")
+    p.add_argument("--freq", help="comma-separated Ricker frequencies in Hz, e.g. 20,40,60 "
+                                  "(one render per snapshot and frequency and SNR)")
+    p.add_argument("--snr", help="with --freq: comma-separated SNRs in dB (inf = no noise), "
+                                 "default inf")
+    p.add_argument("--noise", choices=("white", "band", "coloured"),
+                   help="with --freq: noise kind (coloured: power spectrum f^-1), default white")
+    p.add_argument("--config", metavar="LOOK.toml",
+                   help="TOML whose [output], [labels] and sample-level [sweep] keys replace the "
+                        "store's (any other key must equal the store's)")
+    p.add_argument("--like", action="append", metavar="SECTION",
+                   help="fit a look to this survey section (demseis fit on the field preset; "
+                        "repeatable) and render with its sampling, wavelet, noise and processing")
+    _add_like_options(p)
     p.add_argument("--imaging", help="comma-separated imaging: 1d, psf (2-D dip-limited PSF), or "
                                      "both; default: the source store's")
     p.add_argument("--psf-max-angle", help="comma-separated maximum illumination angles of the PSF "
@@ -74,3 +85,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "allowed range and default. docs/parameters.md holds the same table.")
     p.add_argument("--markdown", action="store_true", help="print the Markdown table of the docs")
     p.set_defaults(func="generate:cmd_params")
+
+
+def _add_like_options(p: argparse.ArgumentParser) -> None:
+    """The options that go with ``--like SECTION`` (those of ``demseis fit``)."""
+    p.add_argument("--dt-ms", type=float, default=None, metavar="MS",
+                   help="with --like: the sample interval where the headers do not give it")
+    p.add_argument("--trace-spacing-m", type=float, default=None, metavar="M",
+                   help="with --like: the trace spacing where the headers do not give it")
+    p.add_argument("--spread", choices=("fit", "preset"), default=None,
+                   help="with --like: ranges around the fitted centre (as demseis fit --spread; "
+                        "default fit)")

@@ -13,7 +13,7 @@ from demseis.api import WorkersWarning, generate, workers_warning
 from demseis.errors import ConfigError, InputError
 from demseis.generator.config.settings import load_config, parse_config
 from demseis.generator.sweep.driver import dry_run_plan, pending_runs
-from demseis.generator.sweep.rerender import relabel, rerender
+from demseis.generator.sweep.rerender import fitted_look, relabel, rerender
 from demseis.parameters import PARAMS, markdown_table, text_table
 from demseis.survey_fit import fit
 
@@ -64,9 +64,40 @@ def _float_list(text: str, name: str) -> list[float]:
     return vals
 
 
+def _toml_file(path: str, flag: str) -> dict:
+    """The TOML file ``path`` given to ``flag``, read; a missing or invalid file is an error
+    naming the flag."""
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise InputError(f"{flag} {path!r}: no such file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{flag} {path!r}: not valid TOML ({exc})") from None
+
+
+def _render_look(args: argparse.Namespace) -> dict | None:
+    """The look of ``demseis render``: the --config TOML, or the look fitted to --like."""
+    if args.like and args.config:
+        raise InputError("give --config LOOK.toml or --like SECTION, not both")
+    if not args.like:
+        if args.dt_ms is not None or args.trace_spacing_m is not None or args.spread is not None:
+            raise InputError("--dt-ms, --trace-spacing-m and --spread go with --like SECTION")
+        return _toml_file(args.config, "--config") if args.config else None
+    dt = None if args.dt_ms is None else args.dt_ms / 1000.0
+    print(f"fitting a look to {', '.join(args.like)} (demseis fit) ...", file=sys.stderr)
+    fitted = fit(args.like, None, dt_s=dt, trace_spacing_m=args.trace_spacing_m,
+                 spread=args.spread or "fit")
+    print(fitted.table())
+    return fitted_look(fitted.config)
+
+
 def cmd_render(args: argparse.Namespace) -> int:
-    freqs = _float_list(args.freq, "--freq")
-    snrs = _float_list(args.snr, "--snr")
+    look = _render_look(args)
+    freqs = None if args.freq is None else _float_list(args.freq, "--freq")
+    if freqs is None and (args.snr is not None or args.noise is not None):
+        raise InputError("--snr and --noise go with --freq")
+    snrs = None if args.snr is None else _float_list(args.snr, "--snr")
     imaging = None
     if args.imaging is not None:
         allowed = PARAMS["imaging"].choices
@@ -83,13 +114,19 @@ def cmd_render(args: argparse.Namespace) -> int:
         if len(vals) != 1:
             raise InputError(f"--psf-aperture {args.psf_aperture!r}: give one value in m")
         aperture = vals[0]
+    if freqs is None and imaging is None and angles is None and aperture is None and not look:
+        raise InputError("give what to render: --freq, --config LOOK.toml, --like SECTION or "
+                         "an imaging flag")
     try:
         summary = rerender(args.store, args.out, freqs_hz=freqs, snrs_db=snrs,
                            noise_kind=args.noise, imaging=imaging, psf_max_angles_deg=angles,
-                           psf_aperture_m=aperture, overwrite=args.overwrite,
+                           psf_aperture_m=aperture, look=look, overwrite=args.overwrite,
                            progress=not args.quiet)
     except ConfigError as exc:
-        raise ConfigError(_flag_message(str(exc))) from None
+        flags = {flag for flag in RENDER_FLAGS.values()
+                 if getattr(args, flag[2:].replace("-", "_")) is not None}
+        source = f"--config {args.config!r}" if args.config else ("--like" if args.like else "")
+        raise ConfigError(_flag_message(str(exc), flags, source)) from None
     print("\n".join(summary.lines()))
     return 1 if summary.failed else 0
 
@@ -99,23 +136,18 @@ RENDER_FLAGS = {"freq_hz": "--freq", "snr_db": "--snr", "noise_kind": "--noise",
                 "psf_aperture_m": "--psf-aperture"}
 
 
-def _flag_message(message: str) -> str:
-    """A config error about a key that a ``render`` flag set, reworded to name the flag:
-    ``sweep.freq_hz[0] = 0.0 is not allowed: ...`` -> ``--freq 0.0 is not allowed: ...``."""
+def _flag_message(message: str, flags: set[str], source: str = "") -> str:
+    """A config error about a key that one of the ``render`` ``flags`` given set, reworded to
+    name the flag: ``sweep.freq_hz[0] = 0.0 is not allowed: ...`` -> ``--freq 0.0 is not
+    allowed: ...``; any other error is prefixed with ``source`` (the look's file)."""
     m = re.match(r"sweep\.(\w+)(?:\[\d+\])? = ", message)
-    if m is None or m.group(1) not in RENDER_FLAGS:
-        return message
+    if m is None or RENDER_FLAGS.get(m.group(1)) not in flags:
+        return f"{source}: {message}" if source else message
     return f"{RENDER_FLAGS[m.group(1)]} {message[m.end():]}"
 
 
 def cmd_relabel(args: argparse.Namespace) -> int:
-    try:
-        with open(args.labels, "rb") as fh:
-            table = tomllib.load(fh)
-    except FileNotFoundError:
-        raise InputError(f"--labels {args.labels!r}: no such file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"--labels {args.labels!r}: not valid TOML ({exc})") from None
+    table = _toml_file(args.labels, "--labels")
     unknown = sorted(set(table) - {"labels"})
     if unknown or not isinstance(table.get("labels", {}), dict):
         raise ConfigError(f"--labels {args.labels!r}: expected only a [labels] table, "

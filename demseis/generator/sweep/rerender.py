@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -12,8 +13,8 @@ import numpy as np
 from demseis import interrupts
 from demseis.datasets import (finalize_store, open_store, read_done_params, read_particles,
                               record_failures, shard_status, write_shard, writer_lock)
-from demseis.errors import StoreError
-from demseis.generator.config.sampling import plan_run
+from demseis.errors import ConfigError, StoreError
+from demseis.generator.config.sampling import SAMPLE_KEYS, plan_run
 from demseis.generator.config.settings import Config, stored_config
 from demseis.generator.engines import EngineRun, get_engine, require_particles, run_from_particles
 from demseis.generator.render.section import render_run
@@ -26,27 +27,95 @@ def _copied(source_cfg: dict[str, Any]) -> dict[str, Any]:
     return {k: (dict(v) if isinstance(v, dict) else v) for k, v in source_cfg.items()}
 
 
-def rerender_config(source_cfg: dict[str, Any], freqs_hz: list[float], snrs_db: list[float],
-                    noise_kind: str, imaging: list[str] | None = None,
-                    psf_max_angles_deg: list[float] | None = None,
-                    psf_aperture_m: float | None = None) -> Config:
-    """The source config with its render parameters replaced (run parameters unchanged).
+#: the config tables whose keys a re-render may change (besides the sample-level ``[sweep]``
+#: keys): what the rendering and the labelling read, never what the DEM ran with
+LOOK_TABLES = ("output", "labels")
 
-    ``imaging``, ``psf_max_angles_deg`` and ``psf_aperture_m`` replace the source's values
-    when given (lists become grids: every snapshot is rendered at each); None keeps them.
+
+def _is_look_key(table: str, key: str) -> bool:
+    """Whether ``[table] key`` is drawn at render time (a re-render may change it)."""
+    return table in LOOK_TABLES or (table == "sweep" and key in SAMPLE_KEYS)
+
+
+def look_config(source_cfg: dict[str, Any], look: Mapping[str, Any]) -> Config:
+    """The source config with the rendering keys of ``look`` replaced: the same runs drawn
+    another way.
+
+    ``look`` is a config mapping (a TOML read as a dict). Its ``[output]`` and ``[labels]``
+    keys and its sample-level ``[sweep]`` keys (:data:`SAMPLE_KEYS`: wavelet, frequency,
+    noise, processing) replace the source's; every other key must equal the source's value (so
+    a whole config, the store's own or one written by ``demseis fit`` from the same preset,
+    can be given), since the stored runs were simulated with it. A key that differs raises
+    :class:`ConfigError` naming it.
     """
     raw = _copied(source_cfg)
+    given: list[tuple[str, str]] = []
+    for table, values in look.items():
+        if not isinstance(values, Mapping):
+            given.append(("", table))
+            raw[table] = values
+            continue
+        raw[table] = {**raw.get(table, {}), **values}
+        given.extend((table, key) for key in values)
+    cfg = stored_config(raw, source="render config")
+    before, after = stored_config(_copied(source_cfg)).to_dict(), cfg.to_dict()
+
+    def value(d: dict[str, Any], table: str, key: str) -> Any:
+        return d.get(key) if not table else d.get(table, {}).get(key)
+
+    fixed = [f"[{t}] {k}" if t else k for t, k in given
+             if not _is_look_key(t, k) and k != "name"
+             and value(before, t, k) != value(after, t, k)]
+    if fixed:
+        raise ConfigError(
+            f"{', '.join(fixed)} differ{'s' if len(fixed) == 1 else ''} from the store's: the "
+            "stored runs were simulated with "
+            f"{'it' if len(fixed) == 1 else 'them'}. A re-render changes only [output], "
+            "[labels] and the sample-level [sweep] keys (demseis params: level 'sample'); "
+            "run the sweep again with demseis generate")
+    return cfg
+
+
+def fitted_look(fitted: Mapping[str, Any]) -> dict[str, Any]:
+    """The look of a config written by ``demseis fit``: its sampling (``[output]`` ``domain``,
+    ``dt_s``, ``trace_spacing_m``) and its sample-level ``[sweep]`` keys (wavelet, frequency,
+    noise and processing), for :func:`look_config`; its geology, taken from a preset, is left
+    out."""
+    return {"output": {k: fitted["output"][k] for k in ("domain", "dt_s", "trace_spacing_m")},
+            "sweep": {k: v for k, v in fitted["sweep"].items() if k in SAMPLE_KEYS}}
+
+
+def rerender_config(source_cfg: dict[str, Any], freqs_hz: list[float] | None = None,
+                    snrs_db: list[float] | None = None, noise_kind: str | None = None,
+                    imaging: list[str] | None = None,
+                    psf_max_angles_deg: list[float] | None = None,
+                    psf_aperture_m: float | None = None,
+                    look: Mapping[str, Any] | None = None) -> Config:
+    """The source config with its render parameters replaced (run parameters unchanged).
+
+    ``look`` (:func:`look_config`) is applied first. ``freqs_hz`` then makes a grid of
+    frequencies and SNRs (``snrs_db``, default no noise) with one render per snapshot and
+    combination, of ``noise_kind`` (default white); None keeps the frequency, SNR and noise
+    kind of the source (or of ``look``), and its renders per snapshot. ``imaging``,
+    ``psf_max_angles_deg`` and ``psf_aperture_m`` replace the values when given (lists become
+    grids: every snapshot is rendered at each); None keeps them.
+    """
+    raw = _copied(look_config(source_cfg, look).to_dict() if look else source_cfg)
     raw["sweep"] = dict(raw["sweep"])
-    raw["sweep"]["freq_hz"] = [f for f in freqs_hz]
-    raw["sweep"]["snr_db"] = ["inf" if math.isinf(s) else s for s in snrs_db]
-    raw["sweep"]["noise_kind"] = noise_kind
+    if freqs_hz is not None:
+        snrs = [math.inf] if snrs_db is None else snrs_db
+        raw["sweep"]["freq_hz"] = [f for f in freqs_hz]
+        raw["sweep"]["snr_db"] = ["inf" if math.isinf(s) else s for s in snrs]
+        raw["sweep"]["noise_kind"] = noise_kind or "white"
+        raw["sweep"]["renders_per_snapshot"] = 1
+    elif snrs_db is not None or noise_kind is not None:
+        raise ConfigError("the SNRs and the noise kind of a re-render go with its frequencies")
     if imaging is not None:
         raw["sweep"]["imaging"] = list(imaging)
     if psf_max_angles_deg is not None:
         raw["sweep"]["psf_max_angle_deg"] = list(psf_max_angles_deg)
     if psf_aperture_m is not None:
         raw["sweep"]["psf_aperture_m"] = psf_aperture_m
-    raw["sweep"]["renders_per_snapshot"] = 1
     raw["name"] = f"{source_cfg.get('name', 'demseis')}-render"
     return stored_config(raw, source="re-render config")
 
@@ -58,19 +127,26 @@ def rerender(source: str | Path, out: str | Path, **options: Any) -> SweepSummar
         return _rerender(source, out, **options)
 
 
-def _rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float], snrs_db: list[float],
-              noise_kind: str = "white", imaging: list[str] | None = None,
-              psf_max_angles_deg: list[float] | None = None, psf_aperture_m: float | None = None,
+def _rerender(source: str | Path, out: str | Path, *, freqs_hz: list[float] | None = None,
+              snrs_db: list[float] | None = None, noise_kind: str | None = None,
+              imaging: list[str] | None = None, psf_max_angles_deg: list[float] | None = None,
+              psf_aperture_m: float | None = None, look: Mapping[str, Any] | None = None,
               overwrite: bool = False, progress: bool = True) -> SweepSummary:
-    """Write a new store with every done run of ``source`` re-rendered.
+    """Write a new store with every done run of ``source`` re-rendered with the config of
+    :func:`rerender_config` (its options; at least one of them).
 
-    Runs that are not done in the source are recorded as failed in the new store. The
-    imaging options (see :func:`rerender_config`) default to the source's.
+    Runs that are not done in the source are recorded as failed in the new store. With the
+    same config as ``generate`` would be given (``look`` of rendering keys only), a run's
+    samples equal those ``generate`` writes with it.
     """
+    if (freqs_hz is None and imaging is None and psf_max_angles_deg is None
+            and psf_aperture_m is None and not look):
+        raise ConfigError("a re-render needs something to change: frequencies, imaging or a "
+                          "look (a config of rendering keys)")
     src = Path(source)
     root = open_store(src)
     cfg = rerender_config(dict(root.attrs)["config"], freqs_hz, snrs_db, noise_kind, imaging,
-                          psf_max_angles_deg, psf_aperture_m)
+                          psf_max_angles_deg, psf_aperture_m, look)
     return _redo(src, out, cfg, overwrite=overwrite, progress=progress)
 
 
