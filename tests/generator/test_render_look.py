@@ -29,6 +29,7 @@ wavelet_phase_deg = { dist = "uniform", low = -30, high = 30 }
 noise_kind = "coloured"
 snr_db = [inf, 8]
 quantise_bits = 8
+renders_per_snapshot = 2
 """
 
 
@@ -54,6 +55,7 @@ def test_render_with_a_look_equals_generate_with_it(tiny_store, tmp_path):
         np.testing.assert_array_equal(r[key].view(np.uint8), g[key].view(np.uint8))
     # the look took: time sections at 4 ms of another shape, drawn phases, 8-bit levels
     assert r["seismic"].shape[1:] != src["seismic"].shape[1:]
+    assert r["seismic"].shape[0] == 2 * src["seismic"].shape[0]   # two renders per snapshot
     pr = params_of(r_root)
     assert set(pr["wavelet"].tolist()) == {PARAMS["wavelet"].choices.index("ormsby")}
     assert np.unique(pr["wavelet_phase_deg"]).size == pr["wavelet_phase_deg"].size > 1

@@ -33,8 +33,10 @@ LOOK_TABLES = ("output", "labels")
 
 
 def _is_look_key(table: str, key: str) -> bool:
-    """Whether ``[table] key`` is drawn at render time (a re-render may change it)."""
-    return table in LOOK_TABLES or (table == "sweep" and key in SAMPLE_KEYS)
+    """Whether ``[table] key`` is drawn at render time (a re-render may change it): those of
+    :data:`LOOK_TABLES`, the sample-level ``[sweep]`` keys and ``renders_per_snapshot``."""
+    return table in LOOK_TABLES or (table == "sweep" and (key in SAMPLE_KEYS
+                                                          or key == "renders_per_snapshot"))
 
 
 def look_config(source_cfg: dict[str, Any], look: Mapping[str, Any]) -> Config:
@@ -42,11 +44,11 @@ def look_config(source_cfg: dict[str, Any], look: Mapping[str, Any]) -> Config:
     another way.
 
     ``look`` is a config mapping (a TOML read as a dict). Its ``[output]`` and ``[labels]``
-    keys and its sample-level ``[sweep]`` keys (:data:`SAMPLE_KEYS`: wavelet, frequency,
-    noise, processing) replace the source's; every other key must equal the source's value (so
-    a whole config, the store's own or one written by ``demseis fit`` from the same preset,
-    can be given), since the stored runs were simulated with it. A key that differs raises
-    :class:`ConfigError` naming it.
+    keys, its sample-level ``[sweep]`` keys (:data:`SAMPLE_KEYS`: wavelet, frequency, noise,
+    processing) and ``renders_per_snapshot`` replace the source's; every other key must equal
+    the source's value (so a whole config, the store's own or one written by ``demseis fit``
+    from the same preset, can be given), since the stored runs were simulated with it. A key
+    that differs raises :class:`ConfigError` naming it.
     """
     raw = _copied(source_cfg)
     given: list[tuple[str, str]] = []
