@@ -45,14 +45,14 @@ def measure(store: Path, runs: int, windows: list[float]) -> list[dict]:
     from demseis.generator.engines import get_engine
     from demseis.generator.render.section import imaging_input, renders_by_snapshot, state_maps
     from demseis.generator.render.survey import labels_at_traces
-    from demseis.generator.sweep.rerender import dem_attempts, output_config, stored_run
+    from demseis.generator.sweep.rerender import dem_attempts, look_config, stored_run
 
     source = dict(open_store(store).attrs)["config"]
     attempts = dem_attempts(store)
     todo = [int(r) for r in np.flatnonzero(shard_status(store) == 1)[:runs]]
     out = []
     for w in windows:
-        cfg = output_config(source, {"velocity_median_m": float(w)})
+        cfg = look_config(source, {"output": {"velocity_median_m": float(w)}})
         engine = get_engine(cfg.model.engine)
         cell = grid_of(cfg).cell_m
         dt = float(cfg.output.dt_s)

@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 from demseis.datasets import open_store  # noqa: E402
 from demseis.generator.engines import get_engine  # noqa: E402
 from demseis.generator.render.section import render_run  # noqa: E402
-from demseis.generator.sweep.rerender import dem_attempts, output_config, stored_run  # noqa: E402
+from demseis.generator.sweep.rerender import dem_attempts, look_config, stored_run  # noqa: E402
 
 #: (title, [output] keys) of each column
 VARIANTS = (
@@ -38,7 +38,7 @@ VARIANTS = (
 
 def render(store: Path, run: int, keys: dict) -> dict:
     """The samples of ``run`` rendered again with ``keys`` in ``[output]``."""
-    cfg = output_config(dict(open_store(store).attrs)["config"], keys)
+    cfg = look_config(dict(open_store(store).attrs)["config"], {"output": keys})
     res = stored_run(store, run, cfg, dem_attempts(store))
     return render_run(cfg, res, get_engine(cfg.model.engine)).arrays
 

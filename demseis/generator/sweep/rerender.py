@@ -161,15 +161,6 @@ def relabel_config(source_cfg: dict[str, Any], labels: dict[str, Any]) -> Config
     return stored_config(raw, source="relabel config")
 
 
-def output_config(source_cfg: dict[str, Any], output: dict[str, Any]) -> Config:
-    """The source config with the ``[output]`` keys of ``output`` replaced (the others, and
-    every other table, unchanged): the same runs drawn another way (``velocity_median_m``,
-    ``block_smoothing_m`` ...)."""
-    raw = _copied(source_cfg)
-    raw["output"] = {**raw.get("output", {}), **output}
-    return stored_config(raw, source="output config")
-
-
 def relabel(source: str | Path, out: str | Path, *, labels: dict[str, Any],
             overwrite: bool = False, progress: bool = True) -> SweepSummary:
     """Write a new store with the seismic of ``source`` and labels made with ``labels``,
