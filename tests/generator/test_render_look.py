@@ -142,3 +142,35 @@ def test_render_like_a_section_takes_its_look_and_keeps_the_runs(tiny_store, tmp
     run_keys = [k for k in src["sweep"] if not _is_look_key("sweep", k)]
     assert run_keys and all(cfg["sweep"][k] == src["sweep"][k] for k in run_keys)
     assert main(["validate", str(out)]) == 0
+
+
+def test_render_with_a_fault_zone_impedance_equals_generate_with_it(tiny_store, tmp_path):
+    look = tmp_path / "fz.toml"
+    look.write_text("[sweep]\nfault_zone_impedance = -0.2\n")
+    rendered, generated = tmp_path / "r.zarr", tmp_path / "g.zarr"
+    assert main(["render", str(tiny_store), "--config", str(look), "--out", str(rendered),
+                 "--quiet"]) == 0
+    assert main(["generate", str(look), "--preset", "tiny", "--out", str(generated),
+                 "--workers", "0", "--quiet"]) == 0
+    (_, src), (r_root, r), (_, g) = (_arrays(p) for p in (tiny_store, rendered, generated))
+    for key in r:
+        np.testing.assert_array_equal(r[key].view(np.uint8), g[key].view(np.uint8))
+    # the fault zones took (the seismic changed, the labels did not)
+    np.testing.assert_array_equal(r["fault"], src["fault"])
+    assert not np.array_equal(r["seismic"], src["seismic"])
+    assert set(params_of(r_root)["fault_zone_impedance"].tolist()) == {np.float32(-0.2)}
+
+
+def test_a_fault_zone_impedance_that_moves_the_runs_draws_is_refused(tiny_store):
+    import zarr
+
+    cfg = dict(zarr.open_group(str(tiny_store), mode="r").attrs)["config"]
+    cfg = {**cfg, "sweep": {**cfg["sweep"], "dip_deg": [40.0, 60.0]}}
+    # one value, or a distribution (drawn after every other run key): the runs are kept
+    for value in (-0.3, {"dist": "uniform", "low": -0.3, "high": 0.0}):
+        kept = look_config(cfg, {"sweep": {"fault_zone_impedance": value}})
+        assert kept.to_dict()["sweep"]["dip_deg"] == [40.0, 60.0]
+    # a list is crossed with dip_deg's: the runs would take other dips
+    with pytest.raises(ConfigError, match=r"fault_zone_impedance as given would change the "
+                                          r"stored runs' dip_deg"):
+        look_config(cfg, {"sweep": {"fault_zone_impedance": [-0.1, -0.2, -0.3]}})

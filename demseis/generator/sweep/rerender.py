@@ -14,7 +14,7 @@ from demseis import interrupts
 from demseis.datasets import (finalize_store, open_store, read_done_params, read_particles,
                               record_failures, shard_status, write_shard, writer_lock)
 from demseis.errors import ConfigError, StoreError
-from demseis.generator.config.sampling import SAMPLE_KEYS, plan_run
+from demseis.generator.config.sampling import SAMPLE_KEYS, plan_run, run_params
 from demseis.generator.config.settings import Config, stored_config
 from demseis.generator.engines import EngineRun, get_engine, require_particles, run_from_particles
 from demseis.generator.render.section import render_run
@@ -30,13 +30,32 @@ def _copied(source_cfg: dict[str, Any]) -> dict[str, Any]:
 #: the config tables whose keys a re-render may change (besides the sample-level ``[sweep]``
 #: keys): what the rendering and the labelling read, never what the DEM ran with
 LOOK_TABLES = ("output", "labels")
+#: run-level ``[sweep]`` keys that only the rendering reads (no engine does): a re-render may
+#: change them as long as every stored run keeps its other run-level values
+RENDER_RUN_KEYS = ("fault_zone_impedance",)
 
 
 def _is_look_key(table: str, key: str) -> bool:
     """Whether ``[table] key`` is drawn at render time (a re-render may change it): those of
-    :data:`LOOK_TABLES`, the sample-level ``[sweep]`` keys and ``renders_per_snapshot``."""
-    return table in LOOK_TABLES or (table == "sweep" and (key in SAMPLE_KEYS
-                                                          or key == "renders_per_snapshot"))
+    :data:`LOOK_TABLES`, the sample-level ``[sweep]`` keys, :data:`RENDER_RUN_KEYS` and
+    ``renders_per_snapshot``."""
+    return table in LOOK_TABLES or (table == "sweep" and (
+        key in SAMPLE_KEYS or key in RENDER_RUN_KEYS or key == "renders_per_snapshot"))
+
+
+def _check_runs_kept(before: Config, after: Config) -> None:
+    """Raise :class:`ConfigError` where ``after`` draws a stored run's run-level values (those
+    an engine reads) otherwise than ``before``: a list of a :data:`RENDER_RUN_KEYS` key is
+    crossed with the other lists, and a distribution of one is drawn from the runs' stream."""
+    moved: set[str] = set()
+    for run in range(before.sweep.n_runs):
+        old, new = dict(run_params(before, run)), dict(run_params(after, run))
+        moved |= {k for k in old if k not in RENDER_RUN_KEYS and old[k] != new.get(k)}
+    if moved:
+        raise ConfigError(
+            f"{', '.join(f'[sweep] {k}' for k in RENDER_RUN_KEYS)} as given would change the "
+            f"stored runs' {', '.join(sorted(moved))} (its values are drawn with theirs): give "
+            "it one value, or run the sweep again with demseis generate")
 
 
 def look_config(source_cfg: dict[str, Any], look: Mapping[str, Any]) -> Config:
@@ -45,10 +64,11 @@ def look_config(source_cfg: dict[str, Any], look: Mapping[str, Any]) -> Config:
 
     ``look`` is a config mapping (a TOML read as a dict). Its ``[output]`` and ``[labels]``
     keys, its sample-level ``[sweep]`` keys (:data:`SAMPLE_KEYS`: wavelet, frequency, noise,
-    processing) and ``renders_per_snapshot`` replace the source's; every other key must equal
-    the source's value (so a whole config, the store's own or one written by ``demseis fit``
-    from the same preset, can be given), since the stored runs were simulated with it. A key
-    that differs raises :class:`ConfigError` naming it.
+    processing), the run-level keys only the rendering reads (:data:`RENDER_RUN_KEYS`, so long
+    as the runs' other values stay as drawn) and ``renders_per_snapshot`` replace the source's;
+    every other key must equal the source's value (so a whole config, the store's own or one
+    written by ``demseis fit`` from the same preset, can be given), since the stored runs were
+    simulated with it. A key that differs raises :class:`ConfigError` naming it.
     """
     raw = _copied(source_cfg)
     given: list[tuple[str, str]] = []
@@ -73,8 +93,10 @@ def look_config(source_cfg: dict[str, Any], look: Mapping[str, Any]) -> Config:
             f"{', '.join(fixed)} differ{'s' if len(fixed) == 1 else ''} from the store's: the "
             "stored runs were simulated with "
             f"{'it' if len(fixed) == 1 else 'them'}. A re-render changes only [output], "
-            "[labels] and the sample-level [sweep] keys (demseis params: level 'sample'); "
-            "run the sweep again with demseis generate")
+            "[labels], the sample-level [sweep] keys (demseis params: level 'sample') and "
+            f"[sweep] {', '.join(RENDER_RUN_KEYS)}; run the sweep again with demseis generate")
+    if any(t == "sweep" and k in RENDER_RUN_KEYS for t, k in given):
+        _check_runs_kept(stored_config(_copied(source_cfg)), cfg)
     return cfg
 
 
