@@ -66,7 +66,7 @@ one on its validation runs and saves it) is read at that threshold the same way
 
 Results accumulate in ``--results`` (JSON): a (training set, seed) already trained with the
 same configuration (stores, budget, device kind) is not retrained, and a score already there
-for the same inputs is not recomputed. Prints one JSON line per training set: mean, std, min,
+for the same inputs (field files known by their bytes) is not recomputed. Prints one JSON line per training set: mean, std, min,
 max over the seeds of every score. ``--figure`` draws one seed's predictions (``--figure-seed``,
 default the first; at the first ``--field-scale``) on every field section and F3 beside the
 masks.
@@ -118,10 +118,10 @@ def digest(obj) -> str:
 
 
 def _file_id(path: str | Path) -> list:
-    """A file's identity in a fingerprint: resolved path, size, modification time."""
+    """A file's identity in a fingerprint: resolved path, size and the SHA-1 of its bytes (not
+    its modification time: the same file copied or mounted afresh keeps its scores)."""
     p = Path(path).resolve()
-    st = p.stat()
-    return [str(p), st.st_size, int(st.st_mtime)]
+    return [str(p), p.stat().st_size, hashlib.sha1(p.read_bytes()).hexdigest()[:16]]
 
 
 # --------------------------------------------------------------------- training sets

@@ -452,3 +452,15 @@ def test_model_threshold_benchmark_reads_at_half_the_model_and_otsu(common, fiel
         np.mean([x["field"]["set"]["f1_at_model"] for x in lines[:2]]), abs=1e-4)
     d = [x["field"]["set"]["f1_at_model"] - x["field"]["set"]["f1_at_0.5"] for x in lines[:2]]
     assert group["model_minus_0.5"]["higher"] == sum(v > 0 for v in d)
+
+
+def test_a_field_file_is_known_by_its_bytes_not_its_time(bench, tmp_path):
+    import os
+
+    f = tmp_path / "f3.sgy"
+    f.write_bytes(b"section")
+    before = bench["_file_id"](f)
+    os.utime(f, (1.0e9, 1.0e9))            # mounted afresh: same bytes, another time
+    assert bench["_file_id"](f) == before
+    f.write_bytes(b"sectioN")              # same size, other bytes
+    assert bench["_file_id"](f) != before
