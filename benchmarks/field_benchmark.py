@@ -66,10 +66,10 @@ one on its validation runs and saves it) is read at that threshold the same way
 
 Results accumulate in ``--results`` (JSON): a (training set, seed) already trained with the
 same configuration (stores, budget, device kind) is not retrained, and a score already there
-for the same inputs (field files known by their bytes) is not recomputed. Prints one JSON line per training set: mean, std, min,
-max over the seeds of every score. ``--figure`` draws one seed's predictions (``--figure-seed``,
-default the first; at the first ``--field-scale``) on every field section and F3 beside the
-masks.
+for the same inputs (field files known by their bytes) is not recomputed. Prints one JSON line
+per training set: mean, std, min, max over the seeds of every score. ``--figure`` draws one
+seed's predictions (``--figure-seed``, default the first; at the first ``--field-scale``) on
+every field section and F3 beside the masks.
 
     PYTHONPATH=$PWD python benchmarks/field_benchmark.py --store dem=D.zarr --store kin=K.zarr \\
         --planar 64 --field-dir ~/.cache/demseis-field/wrona-tutorial-03 \\
