@@ -44,8 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "the rendering keys of a config (--config: [output], [labels], the sample-level "
         "[sweep] keys and [sweep] fault_zone_impedance), or with the look of a survey's "
         "sections (--like: demseis fit's sampling, wavelet, noise and processing). A run's "
-        "samples equal those demseis generate writes "
-        "with the same config.")
+        "samples equal those demseis generate writes with the same config.")
     p.add_argument("store", metavar="STORE", help="source store (its DEM snapshots are reused)")
     p.add_argument("--freq", help="comma-separated Ricker frequencies in Hz, e.g. 20,40,60 "
                                   "(one render per snapshot and frequency and SNR)")

@@ -79,8 +79,8 @@ def look_config(source_cfg: dict[str, Any], look: Mapping[str, Any]) -> Config:
             continue
         raw[table] = {**raw.get(table, {}), **values}
         given.extend((table, key) for key in values)
-    cfg = stored_config(raw, source="render config")
-    before, after = stored_config(_copied(source_cfg)).to_dict(), cfg.to_dict()
+    cfg, source = stored_config(raw, source="render config"), stored_config(_copied(source_cfg))
+    before, after = source.to_dict(), cfg.to_dict()
 
     def value(d: dict[str, Any], table: str, key: str) -> Any:
         return d.get(key) if not table else d.get(table, {}).get(key)
@@ -96,7 +96,7 @@ def look_config(source_cfg: dict[str, Any], look: Mapping[str, Any]) -> Config:
             "[labels], the sample-level [sweep] keys (demseis params: level 'sample') and "
             f"[sweep] {', '.join(RENDER_RUN_KEYS)}; run the sweep again with demseis generate")
     if any(t == "sweep" and k in RENDER_RUN_KEYS for t, k in given):
-        _check_runs_kept(stored_config(_copied(source_cfg)), cfg)
+        _check_runs_kept(source, cfg)
     return cfg
 
 
